@@ -1,0 +1,259 @@
+"""DPI: the digitized dual-operator Prandtl-Ishlinskii model (seed 002).
+
+State: ``N`` fundamental operators ("digits") with a fill ``s_i`` in [0, 1]; ``s_i`` is the
+paper's binary digit ``b_i`` when the input moves in whole steps, a fraction in between.
+Each digit has an expansion pair ``(dXe_i, dYe_i)`` and a contraction pair ``(dXc_i, dYc_i)``
+(stored as positive magnitudes). An input increase fills the least significant unfilled digit
+first, moving the output by ``dYe_i / dXe_i`` per unit input; a decrease empties the least
+significant filled digit first using the contraction pair. Between the all-empty state B0 at
+``(x0, y0)`` and the all-full state B1 at ``(x1, y1)`` this is exactly the classical PI model
+when both pairs are equal (``dX_i = 2 (r_{i+1} - r_i)``, ``dY_i = dX_i * (w_0 + ... + w_i)``,
+``s_i = (z_i - z_{i+1}) / dX_i + 1/2`` in play outputs ``z``), which the tests check.
+
+With unequal pairs, repeated cycles drift (seed 002 eqs 12-14). The turning-point compensator
+(eqs 15-20) fixes it: at every reversal the remaining branch is scaled so that completing it
+lands exactly on B1 (expansion) or B0 (contraction). The paper distributes the correction over
+the digits in proportion to their ``dY`` (``f(i) = dY_i / sum dY``), i.e. a common scale factor;
+we apply it per branch rather than accumulating it into the parameters, which is equivalent for
+the branch and keeps the identified parameters unchanged. The same scaling is applied to the
+input increments, so the model is symmetric in ``X`` and ``Y``: the inverse is the same model
+with the pairs swapped (eqs 21-22), exact up to rounding.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from edge.errors import ModelError
+from edge.hysteresis.base import Branch, HysteresisModel, as_signal, check_branch, check_range
+from edge.hysteresis.table import LookupTable
+
+_TINY = 1e-300
+
+
+class DPIKernel:
+    """Per-tick DPI evaluation on plain Python floats (shared by the model and its table)."""
+
+    stage = "dpi"
+
+    def __init__(self, arrays: dict[str, NDArray[np.float64]]) -> None:
+        self._dxe = arrays["dxe"].tolist()
+        self._dye = arrays["dye"].tolist()
+        self._dxc = arrays["dxc"].tolist()
+        self._dyc = arrays["dyc"].tolist()
+        self._x0, self._y0, self._x1, self._y1 = arrays["anchors"].tolist()
+        self._compensate = bool(arrays["compensate"])
+        self._n = len(self._dxe)
+        self.s = arrays["fills"].tolist()
+        self.x, self.y, direction, self.bx, self.by = arrays["cursor"].tolist()
+        self.direction = int(direction)
+
+    def arrays(self) -> dict[str, NDArray[np.float64]]:
+        """Parameters and current state as arrays (the table form)."""
+        return {
+            "dxe": np.array(self._dxe),
+            "dye": np.array(self._dye),
+            "dxc": np.array(self._dxc),
+            "dyc": np.array(self._dyc),
+            "anchors": np.array([self._x0, self._y0, self._x1, self._y1]),
+            "compensate": np.array(float(self._compensate)),
+            "fills": np.array(self.s),
+            "cursor": np.array([self.x, self.y, self.direction, self.bx, self.by]),
+        }
+
+    def _turn(self, direction: int) -> None:
+        """Start a branch: compute the compensator scales (seed 002 eqs 15-20)."""
+        self.direction = direction
+        self.bx = self.by = 1.0
+        if not self._compensate:
+            return
+        s = self.s
+        if direction > 0:
+            rx = sum((1.0 - f) * d for f, d in zip(s, self._dxe))
+            ry = sum((1.0 - f) * d for f, d in zip(s, self._dye))
+            if rx > _TINY and ry > _TINY:
+                self.bx = (self._x1 - self.x) / rx
+                self.by = (self._y1 - self.y) / ry
+        else:
+            rx = sum(f * d for f, d in zip(s, self._dxc))
+            ry = sum(f * d for f, d in zip(s, self._dyc))
+            if rx > _TINY and ry > _TINY:
+                self.bx = (self.x - self._x0) / rx
+                self.by = (self.y - self._y0) / ry
+
+    def _expand(self, dx: float) -> None:
+        s, bx, by = self.s, self.bx, self.by
+        for i in range(self._n):
+            fill = s[i]
+            if fill >= 1.0:
+                continue
+            width = self._dxe[i] * bx
+            room = (1.0 - fill) * width
+            if dx < room:
+                frac = dx / width
+                s[i] = fill + frac
+                self.y += frac * self._dye[i] * by
+                return
+            s[i] = 1.0
+            self.y += (1.0 - fill) * self._dye[i] * by
+            dx -= room
+            if dx <= 0.0:
+                return
+
+    def _contract(self, dx: float) -> None:
+        s, bx, by = self.s, self.bx, self.by
+        for i in range(self._n):
+            fill = s[i]
+            if fill <= 0.0:
+                continue
+            width = self._dxc[i] * bx
+            room = fill * width
+            if dx < room:
+                frac = dx / width
+                s[i] = fill - frac
+                self.y -= frac * self._dyc[i] * by
+                return
+            s[i] = 0.0
+            self.y -= fill * self._dyc[i] * by
+            dx -= room
+            if dx <= 0.0:
+                return
+
+    def step(self, x: float) -> float:
+        dx = x - self.x
+        if dx > 0.0:
+            if self.direction != 1:
+                self._turn(1)
+            self._expand(dx)
+        elif dx < 0.0:
+            if self.direction != -1:
+                self._turn(-1)
+            self._contract(-dx)
+        self.x = x
+        return self.y
+
+
+class DPIModel(HysteresisModel):
+    """DPI model (see module docstring).
+
+    Args:
+        dxe, dye: expansion pairs, positive (input / output units).
+        dxc, dyc: contraction pairs, positive magnitudes.
+        x0, y0: input and output at B0 (all digits empty).
+        x1, y1: input and output at B1 (all full); default ``x0 + sum(dxe)``, ``y0 + sum(dye)``.
+        compensate: apply the turning-point compensator (default on; off only to study drift).
+
+    Inputs are clamped to ``[x0, x1]``.
+    """
+
+    kind = "dpi"
+
+    def __init__(
+        self,
+        dxe: ArrayLike,
+        dye: ArrayLike,
+        dxc: ArrayLike,
+        dyc: ArrayLike,
+        *,
+        x0: float,
+        y0: float,
+        x1: float | None = None,
+        y1: float | None = None,
+        compensate: bool = True,
+    ) -> None:
+        pairs = [as_signal(a, name) for a, name in ((dxe, "dxe"), (dye, "dye"), (dxc, "dxc"), (dyc, "dyc"))]
+        n = pairs[0].size
+        if n == 0 or any(p.size != n for p in pairs):
+            raise ModelError("DPI needs four pair arrays of the same non-zero length")
+        for p, name in zip(pairs, ("dxe", "dye", "dxc", "dyc")):
+            if np.any(p <= 0):
+                raise ModelError(
+                    f"DPI {name} must be > 0 everywhere (monotone branches); "
+                    f"smallest is {p.min():.3g}: give the fit a positive lower bound"
+                )
+        x1 = x0 + float(pairs[0].sum()) if x1 is None else x1
+        y1 = y0 + float(pairs[1].sum()) if y1 is None else y1
+        check_range(x0, x1, "DPI input range (x0, x1)")
+        check_range(y0, y1, "DPI output range (y0, y1)")
+        self.params = dict(zip(("dxe", "dye", "dxc", "dyc"), pairs))
+        self.anchors = (float(x0), float(y0), float(x1), float(y1))
+        self.compensate = compensate
+        self._kernel = DPIKernel(
+            {
+                **self.params,
+                "anchors": np.array(self.anchors),
+                "compensate": np.array(float(compensate)),
+                "fills": np.zeros(n),
+                "cursor": np.array([x0, y0, 0.0, 1.0, 1.0]),
+            }
+        )
+        self.reset(x0, "ascending")
+
+    @property
+    def n_operators(self) -> int:
+        return self.params["dxe"].size
+
+    @property
+    def input_range(self) -> tuple[float, float]:
+        return self.anchors[0], self.anchors[2]
+
+    def step(self, u: float) -> float:
+        return self._kernel.step(self._clamp(float(u)))
+
+    def reset(self, u0: float = 0.0, branch: Branch = "ascending") -> None:
+        check_branch(branch)
+        x = self._clamp(float(u0))
+        x0, y0, x1, y1 = self.anchors
+        k = self._kernel
+        k.direction, k.bx, k.by = 0, 1.0, 1.0
+        if branch == "centered":
+            frac = (x - x0) / (x1 - x0)
+            k.s = [frac] * self.n_operators
+            k.x, k.y = x, y0 + frac * (y1 - y0)
+        elif branch == "ascending":
+            k.s, k.x, k.y = [0.0] * self.n_operators, x0, y0
+            k.step(x)
+        else:
+            k.s, k.x, k.y = [1.0] * self.n_operators, x1, y1
+            k.step(x)
+
+    def get_state(self) -> dict[str, NDArray[np.float64]]:
+        arrays = self._kernel.arrays()
+        return {"fills": arrays["fills"], "cursor": arrays["cursor"]}
+
+    def set_state(self, state: dict[str, NDArray[np.float64]]) -> None:
+        fills = np.asarray(state["fills"], dtype=float)
+        if fills.size != self.n_operators:
+            raise ModelError(f"DPI state has {fills.size} digits; this model has {self.n_operators}")
+        k = self._kernel
+        k.s = fills.tolist()
+        k.x, k.y, direction, k.bx, k.by = np.asarray(state["cursor"], dtype=float).tolist()
+        k.direction = int(direction)
+
+    def inverse(self) -> DPIModel:
+        """Swap the X and Y of every pair and of the anchors (seed 002 eqs 21-22)."""
+        p = self.params
+        x0, y0, x1, y1 = self.anchors
+        model = DPIModel(
+            p["dye"],
+            p["dxe"],
+            p["dyc"],
+            p["dxc"],
+            x0=y0,
+            y0=x0,
+            x1=y1,
+            y1=x1,
+            compensate=self.compensate,
+        )
+        model.set_state(swap_state(self.get_state()))
+        return model
+
+    def compile(self) -> LookupTable:
+        return LookupTable.chain(self.kind, [(DPIKernel.stage, self._kernel.arrays())], self.input_range)
+
+
+def swap_state(state: dict[str, NDArray[np.float64]]) -> dict[str, NDArray[np.float64]]:
+    """The inverse model's state for a forward state: same fills, X and Y exchanged."""
+    x, y, direction, bx, by = np.asarray(state["cursor"], dtype=float).tolist()
+    return {"fills": np.array(state["fills"], dtype=float), "cursor": np.array([y, x, direction, by, bx])}

@@ -1,0 +1,1 @@
+"""Runtime pieces of the edge controller."""

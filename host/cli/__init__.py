@@ -1,0 +1,100 @@
+"""The ``pmactl`` command line: one entry point, subcommands imported only when run.
+
+``pmactl --help`` needs nothing beyond the standard library, so it works on an SBC with only
+the ``edge`` extra; a host command there says which extra to install. Errors are one line on
+stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+from collections.abc import Callable, Sequence
+
+from edge.errors import PmactlError
+
+HOST_ONLY_MODULES = {"scipy", "matplotlib"}
+
+
+def _fit(args: argparse.Namespace) -> int:
+    from host.cli.fit import run
+
+    return run(args)
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from host.cli.demo import run
+
+    return run(args)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="pmactl",
+        description="Pneumatic muscle actuator control: hysteresis identification, models, deployment.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    demo = sub.add_parser("demo", help="identify every model on the shipped example data and compare them")
+    demo.add_argument("--out", metavar="DIR", help="keep the bundles here (default: a temporary directory)")
+    demo.add_argument("--json", action="store_true", help="print the comparison as JSON")
+    demo.set_defaults(run=_demo)
+
+    fit = sub.add_parser("fit", help="identify a hysteresis model from a measured-data CSV")
+    fit.add_argument("--model", required=True, choices=["pi", "mpi", "dpi", "preisach"])
+    fit.add_argument("--train", required=True, metavar="CSV", help="training recording (t,u,y)")
+    fit.add_argument("--test", action="append", default=[], metavar="CSV", help="held-out recording (repeatable)")
+    fit.add_argument("--operators", type=int, metavar="N", help="play operators / DPI digits / Preisach grid intervals")
+    fit.add_argument(
+        "--parameterisation",
+        choices=["free", "exponential"],
+        default="free",
+        help="pi only: free weights or seed 000's beta/delta/mu form",
+    )
+    fit.add_argument(
+        "--preisach-method",
+        choices=["lsq", "forc"],
+        default="lsq",
+        help="preisach only: least squares on any data, or first-order reversal curves",
+    )
+    fit.add_argument(
+        "--calibration",
+        type=float,
+        default=0.1,
+        metavar="FRACTION",
+        help="share of each test record (after it starts moving) used to estimate its "
+        "initial state and offset; never scored (default 0.1)",
+    )
+    fit.add_argument("--units", default="u,y", metavar="U,Y", help="units of input and output for the bundle manifest")
+    fit.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    fit.add_argument("--save", metavar="DIR", help="write the lookup-table bundle (model + inverse) here")
+    fit.set_defaults(run=_fit)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``pmactl`` console script."""
+    args = build_parser().parse_args(argv)
+    run: Callable[[argparse.Namespace], int] = args.run
+    warnings.showwarning = _one_line_warning
+    try:
+        return run(args)
+    except PmactlError as exc:
+        print(f"pmactl {args.command}: error: {exc}", file=sys.stderr)
+    except ModuleNotFoundError as exc:
+        if exc.name not in HOST_ONLY_MODULES:
+            raise
+        print(
+            f"pmactl {args.command}: error: needs the host extra ({exc.name} is not installed); "
+            "install it with: pip install 'pmactl[host]'",
+            file=sys.stderr,
+        )
+    except KeyboardInterrupt:
+        print(f"pmactl {args.command}: interrupted", file=sys.stderr)
+        return 130
+    return 2
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
+    print(f"pmactl: warning: {message}", file=sys.stderr)

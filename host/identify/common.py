@@ -1,0 +1,98 @@
+"""Shared pieces of the estimators: where the memory is known, bounded least squares."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import lsq_linear
+
+from edge.errors import DataError, ModelError
+from edge.hysteresis.base import Branch, as_signal
+
+
+@dataclass(frozen=True)
+class MemoryStart:
+    """First training sample at which the hysteresis memory is known.
+
+    A hysteresis memory is erased by the extremes of the input: once the input reaches the end
+    of the range it sweeps (assuming it never left that range before the recording started), the
+    state is negative saturation (at the minimum, arrived from above: ``descending``) or
+    positive saturation (at the maximum: ``ascending``). Identification starts there, so the
+    unknown state at the start of a recording never biases the fit.
+    """
+
+    index: int
+    branch: Branch
+
+
+def memory_start(u: NDArray[np.float64], tolerance: float = 0.005) -> MemoryStart:
+    """The first sample within ``tolerance`` x range of the input minimum or maximum."""
+    lo, hi = float(u.min()), float(u.max())
+    band = tolerance * (hi - lo)
+    at_min = int(np.argmax(u <= lo + band))
+    at_max = int(np.argmax(u >= hi - band))
+    if at_min <= at_max:
+        return MemoryStart(at_min, "descending")
+    return MemoryStart(at_max, "ascending")
+
+
+def training_signals(
+    u: ArrayLike, y: ArrayLike, min_samples: int = 20
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Validate a training pair: finite 1-D arrays of equal length with a moving input."""
+    u_arr, y_arr = as_signal(u, "u"), as_signal(y, "y")
+    if u_arr.size != y_arr.size:
+        raise DataError(f"u has {u_arr.size} samples but y has {y_arr.size}; give equal lengths")
+    if u_arr.size < min_samples:
+        raise DataError(f"only {u_arr.size} training samples; need at least {min_samples}")
+    if np.ptp(u_arr) <= 1e-12 * max(1.0, float(np.abs(u_arr).max())):
+        raise DataError("the input u is constant; hysteresis needs a moving input to identify")
+    return u_arr, y_arr
+
+
+def bounded_lsq(
+    design: NDArray[np.float64],
+    target: NDArray[np.float64],
+    lower: NDArray[np.float64],
+    upper: NDArray[np.float64] | None = None,
+) -> NDArray[np.float64]:
+    """``argmin |design @ x - target|`` subject to ``lower <= x <= upper`` (columns scaled)."""
+    scale = np.linalg.norm(design, axis=0)
+    scale[scale == 0] = 1.0
+    upper = np.full(design.shape[1], np.inf) if upper is None else upper
+    result = lsq_linear(design / scale, target, bounds=(lower * scale, upper * scale), method="bvls")
+    return result.x / scale
+
+
+MIN_SLOPE_DOC = (
+    "min_slope_ratio: smallest local slope of any branch, as a fraction of the average slope "
+    "ptp(y)/ptp(u). Keeps the inverse well conditioned: its gain is at most 1/ratio times the "
+    "average, and a flat branch (which the inverse cannot resolve in floating point) is excluded."
+)
+
+
+def average_slope(u: NDArray[np.float64], y: NDArray[np.float64]) -> float:
+    """``ptp(y) / ptp(u)``: the scale the slope floors refer to (output units per input unit)."""
+    return float(np.ptp(y) / np.ptp(u))
+
+
+def check_slope_ratio(ratio: float) -> float:
+    """Validate ``min_slope_ratio`` (0 < ratio < 1)."""
+    if not 0.0 < ratio < 1.0:
+        raise ModelError(f"min_slope_ratio must be between 0 and 1; got {ratio}")
+    return float(ratio)
+
+
+class Stopwatch:
+    """Measures the wall time of a fit: ``with Stopwatch() as sw: ...; sw.seconds``."""
+
+    def __enter__(self) -> Stopwatch:
+        self._start = time.perf_counter()
+        self.seconds = 0.0
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.seconds = time.perf_counter() - self._start

@@ -1,0 +1,96 @@
+"""DPI identification from the expansion and contraction branches.
+
+The input range of the training data is cut into ``N`` equal digits (``dXe = dXc = dX``), so
+the digit fills are those of a PI model with thresholds ``r_i = i dX / 2`` (see
+:mod:`edge.hysteresis.dpi`): ``s_i = (z_i - z_{i+1}) / dX + 1/2`` from play outputs ``z``.
+Splitting every fill change into its expansion and contraction part, the uncompensated output
+``y = y_start + sum_i dYe_i Fe_i(t) - sum_i dYc_i Fc_i(t)`` (``Fe``/``Fc``: cumulative fill gained
+while expanding / lost while contracting) is linear in the pairs: a bounded least-squares
+problem with ``dY > 0`` and one soft equality ``sum dYe = sum dYc`` (the major loop closes, so
+the compensator is inactive on it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from edge.errors import ModelError
+from edge.hysteresis.dpi import DPIModel
+from edge.hysteresis.pi import branch_play_state, play_outputs
+from host.identify.common import (
+    MemoryStart,
+    Stopwatch,
+    average_slope,
+    bounded_lsq,
+    check_slope_ratio,
+    memory_start,
+    training_signals,
+)
+
+
+def digit_fills(u: NDArray[np.float64], dx: float, n: int, start: MemoryStart) -> NDArray[np.float64]:
+    """Fill of every digit (columns) at every sample from ``start.index`` (rows).
+
+    The equivalent PI model has ``n + 1`` plays centred on the input range; the last one
+    (threshold = half the range) never moves inside the range and starts centred.
+    """
+    thresholds = np.arange(n + 1) * dx / 2.0
+    x = u - (float(u.min()) + n * dx / 2.0)
+    z0 = branch_play_state(float(x[start.index]), thresholds, start.branch)
+    z0[-1] = 0.0
+    z = play_outputs(x[start.index :], thresholds, z0)
+    return (z[:, :-1] - z[:, 1:]) / dx + 0.5
+
+
+def branch_regressors(fills: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Cumulative fill gained (expansion) and lost (contraction) per digit since the start."""
+    change = np.diff(fills, axis=0, prepend=fills[:1])
+    return np.cumsum(np.maximum(change, 0.0), axis=0), np.cumsum(np.maximum(-change, 0.0), axis=0)
+
+
+class DPIEstimator:
+    """Identify a :class:`~edge.hysteresis.dpi.DPIModel`.
+
+    Args:
+        n_operators: number of digits ``N``.
+        closure_weight: weight of the soft constraint ``sum dYe = sum dYc`` relative to one
+            sample's residual, scaled by the number of samples.
+        min_slope_ratio: lower bound of every ``dY_i / dX_i`` relative to the average slope;
+            see :data:`host.identify.common.MIN_SLOPE_DOC`.
+    """
+
+    def __init__(self, *, n_operators: int = 25, closure_weight: float = 1.0, min_slope_ratio: float = 0.01) -> None:
+        if n_operators < 1:
+            raise ModelError(f"n_operators must be >= 1; got {n_operators}")
+        self.n_operators = n_operators
+        self.closure_weight = closure_weight
+        self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
+
+    def fit(self, u: ArrayLike, y: ArrayLike) -> DPIEstimator:
+        u_arr, y_arr = training_signals(u, y)
+        n = self.n_operators
+        with Stopwatch() as watch:
+            start = memory_start(u_arr)
+            target = y_arr[start.index :]
+            x0, x1 = float(u_arr.min()), float(u_arr.max())
+            dx = (x1 - x0) / n
+            fills = digit_fills(u_arr, dx, n, start)
+            gained, lost = branch_regressors(fills)
+            design = np.column_stack([gained, -lost, np.ones(len(target))])
+            closure = np.sqrt(self.closure_weight * len(target)) * np.r_[np.ones(n), -np.ones(n), 0.0]
+            floor = self.min_slope_ratio * average_slope(u_arr, y_arr) * dx
+            x = bounded_lsq(np.vstack([design, closure]), np.r_[target, 0.0], np.r_[np.full(2 * n, floor), -np.inf])
+            dye, dyc, y_start = x[:n], x[n : 2 * n], float(x[2 * n])
+            if start.branch == "descending":  # started at B0
+                y0 = y_start
+            else:  # started at B1
+                y0 = y_start - float(dyc.sum())
+            widths = np.full(n, dx)
+            model = DPIModel(widths, dye, widths, dyc, x0=x0, y0=y0, x1=x1, y1=y0 + float(dye.sum()))
+            model.reset(float(u_arr[start.index]), start.branch)
+            self.train_prediction_ = model.simulate(u_arr[start.index :])
+        self.model_ = model
+        self.start_index_, self.start_branch_ = start.index, start.branch
+        self.fit_seconds_ = watch.seconds
+        return self

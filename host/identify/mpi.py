@@ -1,0 +1,170 @@
+"""MPI identification: equation error first, output error second.
+
+1. Equation error (Kuhnen): with the inverse shaper written as a sum of segment lengths,
+   ``s^-1(y) = sum_j c_j h_j(y)`` with knots ``g_j`` spread over the output range,
+   ``h_j(y) = clip(y - g_j, 0, g_{j+1} - g_j)`` (the first segment extended below, the last
+   above) and ``c_0 = 1`` to fix the scale, the relation ``PI[u] + b = s^-1(y)`` is linear in
+   the play weights ``w >= 0``, the offset ``b`` and the slopes ``c_j > 0``: one bounded least
+   squares problem.
+2. Output error: ``y_hat = s(P w + b)`` is refined by bounded nonlinear least squares with the
+   analytic Jacobian (``d y_hat / d c_j = -h_j(y_hat) / c_k(y_hat)``, ``k`` the active segment).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import least_squares
+
+from edge.errors import ModelError
+from edge.hysteresis.mpi import MPIModel
+from edge.hysteresis.pi import PIModel
+from edge.hysteresis.shaper import MonotonePiecewiseLinear
+from host.identify.common import (
+    Stopwatch,
+    average_slope,
+    bounded_lsq,
+    check_slope_ratio,
+    memory_start,
+    training_signals,
+)
+from host.identify.pi import start_plays, uniform_thresholds
+
+
+def segment_lengths(y: NDArray[np.float64], knots: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``h_j(y)`` for every sample (rows) and segment (columns); see module docstring."""
+    lower = knots[:-1]
+    upper = knots[1:]
+    h = np.clip(y[:, None] - lower[None, :], 0.0, (upper - lower)[None, :])
+    h[:, 0] = np.minimum(y - knots[0], knots[1] - knots[0])  # extends below the first knot
+    h[:, -1] = np.maximum(y - knots[-2], 0.0)  # extends above the last inner knot
+    return h
+
+
+def inverse_shaper(knots: NDArray[np.float64], slopes: NDArray[np.float64]) -> MonotonePiecewiseLinear:
+    """``s^-1`` through ``(g_0, 0)`` with the given segment slopes, as a knot table."""
+    values = np.concatenate([[0.0], np.cumsum(slopes[:-1] * np.diff(knots[:-1]))])
+    return MonotonePiecewiseLinear(knots[:-1], values, slopes[0], slopes[-1])
+
+
+class MPIEstimator:
+    """Identify an :class:`~edge.hysteresis.mpi.MPIModel`.
+
+    Args:
+        n_operators: play operators of the PI part.
+        n_dead_zones: segments of the dead-zone shaper (seed 000 uses thresholds
+            ``g_j = j/m * max``; here they are spread evenly over the output range).
+        refine: run the output-error refinement (step 2).
+        min_slope_ratio: bounds ``w_0 >= ratio * average slope`` and shaper slopes
+            ``ratio <= ds/dx <= 1/ratio``; see :data:`host.identify.common.MIN_SLOPE_DOC`.
+    """
+
+    def __init__(
+        self,
+        *,
+        n_operators: int = 25,
+        n_dead_zones: int = 10,
+        refine: bool = True,
+        min_slope_ratio: float = 0.01,
+    ) -> None:
+        if n_operators < 1 or n_dead_zones < 1:
+            raise ModelError(f"need >= 1 operators and dead zones; got {n_operators}, {n_dead_zones}")
+        self.n_operators = n_operators
+        self.n_dead_zones = n_dead_zones
+        self.refine = refine
+        self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
+
+    def fit(self, u: ArrayLike, y: ArrayLike) -> MPIEstimator:
+        u_arr, y_arr = training_signals(u, y)
+        with Stopwatch() as watch:
+            start = memory_start(u_arr)
+            target = y_arr[start.index :]
+            thresholds = uniform_thresholds(u_arr, self.n_operators)
+            plays = start_plays(u_arr, thresholds, start)
+            knots = np.linspace(target.min(), target.max(), self.n_dead_zones + 2)
+            lower, upper = self._bounds(average_slope(u_arr, y_arr), knots.size - 1)
+            weights, offset, slopes = self._equation_error(plays, target, knots, lower, upper)
+            if self.refine:
+                weights, offset, slopes = self._output_error(
+                    plays, target, knots, weights, offset, slopes, lower, upper
+                )
+            pi = PIModel(
+                thresholds,
+                weights,
+                output_offset=offset,
+                actuator_range=(float(u_arr.min()), float(u_arr.max())),
+            )
+            model = MPIModel(pi, inverse_shaper(knots, slopes).inverse())
+            model.reset(float(u_arr[start.index]), start.branch)
+            self.train_prediction_ = model.simulate(u_arr[start.index :])
+        self.model_ = model
+        self.start_index_, self.start_branch_ = start.index, start.branch
+        self.fit_seconds_ = watch.seconds
+        return self
+
+    def _bounds(self, slope: float, segments: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Bounds of ``(w, b, c)``: ``w_0`` floored, ``c`` (inverse-shaper slopes) in [r, 1/r]."""
+        ratio = self.min_slope_ratio
+        lower = np.r_[ratio * slope, np.zeros(self.n_operators - 1), -np.inf, np.full(segments, ratio)]
+        upper = np.r_[np.full(self.n_operators + 1, np.inf), np.full(segments, 1.0 / ratio)]
+        lower[self.n_operators + 1] = upper[self.n_operators + 1] = 1.0  # c_0 = 1 fixes the scale
+        return lower, upper
+
+    def _equation_error(
+        self,
+        plays: NDArray[np.float64],
+        target: NDArray[np.float64],
+        knots: NDArray[np.float64],
+        lower: NDArray[np.float64],
+        upper: NDArray[np.float64],
+    ) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
+        n = plays.shape[1]
+        h = segment_lengths(target, knots)
+        design = np.column_stack([plays, np.ones(len(plays)), -h[:, 1:]])
+        keep = np.r_[np.arange(n + 1), np.arange(n + 2, lower.size)]  # c_0 is not a variable here
+        x = bounded_lsq(design, h[:, 0], lower[keep], upper[keep])
+        return x[:n], float(x[n]), np.r_[1.0, x[n + 1 :]]
+
+    def _output_error(
+        self,
+        plays: NDArray[np.float64],
+        target: NDArray[np.float64],
+        knots: NDArray[np.float64],
+        weights: NDArray[np.float64],
+        offset: float,
+        slopes: NDArray[np.float64],
+        lower: NDArray[np.float64],
+        upper: NDArray[np.float64],
+    ) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
+        n = plays.shape[1]
+        m = slopes.size
+        ones = np.ones(len(plays))
+
+        def unpack(theta: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
+            return theta[:n], float(theta[n]), theta[n + 1 :]
+
+        def predict(theta: NDArray[np.float64]) -> NDArray[np.float64]:
+            w, b, c = unpack(theta)
+            return inverse_shaper(knots, c).inverse()(plays @ w + b)
+
+        def residual(theta: NDArray[np.float64]) -> NDArray[np.float64]:
+            return predict(theta) - target
+
+        def jacobian(theta: NDArray[np.float64]) -> NDArray[np.float64]:
+            _, _, c = unpack(theta)
+            y_hat = predict(theta)
+            segment = np.clip(np.searchsorted(knots[1:-1], y_hat, side="right"), 0, m - 1)
+            gain = 1.0 / c[segment]  # ds/dx at each sample
+            h = segment_lengths(y_hat, knots)
+            return np.column_stack([plays * gain[:, None], ones * gain, -h * gain[:, None]])
+
+        # least_squares needs lower < upper: open c_0's pin by a hair (it stays at 1)
+        lower, upper = lower.copy(), upper.copy()
+        lower[n + 1], upper[n + 1] = 1.0 - 1e-12, 1.0 + 1e-12
+        theta0 = np.clip(np.r_[weights, offset, slopes], lower, upper)
+        result = least_squares(
+            residual, theta0, jac=jacobian, bounds=(lower, upper), method="trf", max_nfev=60, x_scale="jac"
+        )
+        w, b, c = unpack(result.x)
+        self.refine_cost_ratio_ = float(result.cost / max(0.5 * residual(theta0) @ residual(theta0), 1e-300))
+        return w, b, c

@@ -1,0 +1,147 @@
+"""PI identification by constrained least squares (non-negative play weights).
+
+Thresholds ``r_i = i * (range / 2) / n`` (i = 0..n-1) for free weights; the output is linear in
+the weights and an offset, solved with bounds ``w_0 > 0``, ``w_i >= 0`` (which keeps the model
+invertible). The 3-parameter form of seed 000 eq 5 (``r_i = beta*i``,
+``w_i = delta*exp(-mu*r_i)``) is fitted by variable projection: for each ``beta`` on a grid
+the play outputs are computed once, ``mu`` is searched on a bracket and ``delta`` and the offset
+are linear.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import minimize_scalar
+
+from edge.errors import ModelError
+from edge.hysteresis.pi import PIModel, branch_play_state, exponential_pi_parameters, play_outputs
+from host.identify.common import (
+    MemoryStart,
+    Stopwatch,
+    average_slope,
+    bounded_lsq,
+    check_slope_ratio,
+    memory_start,
+    training_signals,
+)
+
+
+def start_plays(u: NDArray[np.float64], thresholds: NDArray[np.float64], start: MemoryStart) -> NDArray[np.float64]:
+    """Play outputs from ``start.index`` on, starting in the state ``start.branch``."""
+    z0 = branch_play_state(float(u[start.index]), thresholds, start.branch)
+    return play_outputs(u[start.index :], thresholds, z0)
+
+
+def uniform_thresholds(u: NDArray[np.float64], n: int) -> NDArray[np.float64]:
+    """``n`` thresholds from 0 to just under half the input range."""
+    return np.arange(n) * (float(np.ptp(u)) / 2.0) / n
+
+
+class PIEstimator:
+    """Identify a :class:`~edge.hysteresis.pi.PIModel`.
+
+    Args:
+        n_operators: number of play operators (the first has threshold 0, the linear term).
+        parameterisation: ``"free"`` weights or seed 000's 3-parameter ``"exponential"``.
+        min_slope_ratio: lower bound of ``w_0`` (the slope right after a reversal) relative to
+            the average slope; see :data:`host.identify.common.MIN_SLOPE_DOC`.
+    """
+
+    def __init__(
+        self,
+        *,
+        n_operators: int = 25,
+        parameterisation: Literal["free", "exponential"] = "free",
+        min_slope_ratio: float = 0.01,
+    ) -> None:
+        if n_operators < 1:
+            raise ModelError(f"n_operators must be >= 1; got {n_operators}")
+        if parameterisation not in ("free", "exponential"):
+            raise ModelError(f"parameterisation {parameterisation!r} unknown; use 'free' or 'exponential'")
+        self.n_operators = n_operators
+        self.parameterisation = parameterisation
+        self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
+
+    def fit(self, u: ArrayLike, y: ArrayLike) -> PIEstimator:
+        u_arr, y_arr = training_signals(u, y)
+        with Stopwatch() as watch:
+            start = memory_start(u_arr)
+            target = y_arr[start.index :]
+            if self.parameterisation == "free":
+                thresholds = uniform_thresholds(u_arr, self.n_operators)
+                floor = self.min_slope_ratio * average_slope(u_arr, y_arr)
+                weights, offset = self._fit_free(start_plays(u_arr, thresholds, start), target, floor)
+            else:
+                thresholds, weights, offset = self._fit_exponential(u_arr, target, start)
+            model = PIModel(
+                thresholds,
+                weights,
+                output_offset=offset,
+                actuator_range=(float(u_arr.min()), float(u_arr.max())),
+            )
+            model.reset(float(u_arr[start.index]), start.branch)
+            self.train_prediction_ = model.simulate(u_arr[start.index :])
+        self.model_ = model
+        self.start_index_, self.start_branch_ = start.index, start.branch
+        self.fit_seconds_ = watch.seconds
+        return self
+
+    @staticmethod
+    def _fit_free(
+        plays: NDArray[np.float64], target: NDArray[np.float64], first_weight_floor: float
+    ) -> tuple[NDArray[np.float64], float]:
+        n = plays.shape[1]
+        design = np.column_stack([plays, np.ones(len(plays))])
+        lower = np.r_[first_weight_floor, np.zeros(n - 1), -np.inf]
+        x = bounded_lsq(design, target, lower)
+        return x[:n], float(x[n])
+
+    def _fit_exponential(
+        self, u: NDArray[np.float64], target: NDArray[np.float64], start: MemoryStart
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
+        n = self.n_operators
+        if n < 2:
+            raise ModelError("the exponential parameterisation needs n_operators >= 2")
+        floor = self.min_slope_ratio * float(np.ptp(target) / np.ptp(u))  # delta = w_0 >= floor
+        beta_max = float(np.ptp(u)) / 2.0 / (n - 1)  # largest threshold at half the input range
+        grid = beta_max * np.linspace(0.1, 1.0, 10)
+        profiles = [_beta_profile(u, target, start, n, beta, floor) for beta in grid]
+        best = int(np.argmin([p[0] for p in profiles]))
+        refined = minimize_scalar(
+            lambda beta: _beta_profile(u, target, start, n, beta, floor)[0],
+            bounds=(grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]),
+            method="bounded",
+            options={"xatol": 1e-4 * beta_max, "maxiter": 12},
+        )
+        beta = float(refined.x) if refined.fun < profiles[best][0] else float(grid[best])
+        _, mu, delta, c = _beta_profile(u, target, start, n, beta, floor)
+        thresholds, weights = exponential_pi_parameters(n, beta, delta, mu)
+        self.beta_, self.mu_, self.delta_ = beta, mu, delta
+        return thresholds, weights, c
+
+
+def _beta_profile(
+    u: NDArray[np.float64], target: NDArray[np.float64], start: MemoryStart, n: int, beta: float, floor: float
+) -> tuple[float, float, float, float]:
+    """Best ``(cost, mu, delta, offset)`` of the exponential PI for a fixed ``beta``.
+
+    The plays are computed once; ``mu`` is searched on a bracket, ``delta`` (>= floor) and the
+    offset are linear least squares for each ``mu``.
+    """
+    thresholds = beta * np.arange(n)
+    plays = start_plays(u, thresholds, start)
+    ones = np.ones(len(plays))
+
+    def linear_part(mu: float) -> tuple[float, float, float]:
+        column = plays @ np.exp(-mu * thresholds)
+        delta, c = bounded_lsq(np.column_stack([column, ones]), target, np.array([floor, -np.inf]))
+        residual = column * delta + c - target
+        return float(residual @ residual), float(delta), float(c)
+
+    mu_span = 8.0 / thresholds[-1]
+    search = minimize_scalar(lambda mu: linear_part(mu)[0], bounds=(-mu_span / 4, mu_span), method="bounded")
+    cost, delta, c = linear_part(float(search.x))
+    return cost, float(search.x), delta, c

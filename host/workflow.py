@@ -1,0 +1,82 @@
+"""The steps behind ``pmactl fit`` and ``pmactl demo``: fit, score, bundle."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from edge.errors import ModelError
+from edge.hysteresis.base import HysteresisModel
+from host.data import Measurement
+from host.evaluate import Prediction, predict_unknown_start
+from host.identify import ESTIMATORS, DPIEstimator, MPIEstimator, PIEstimator, PreisachEstimator
+from models_export.bundle import write_bundle
+
+Estimator = PIEstimator | MPIEstimator | DPIEstimator | PreisachEstimator
+
+
+def make_estimator(
+    model: str,
+    *,
+    operators: int | None = None,
+    parameterisation: str = "free",
+    preisach_method: str = "lsq",
+) -> Estimator:
+    """An unfitted estimator for ``model`` (``pi``, ``mpi``, ``dpi``, ``preisach``).
+
+    ``operators`` is the number of play operators / digits, or grid intervals for Preisach.
+    """
+    if model not in ESTIMATORS:
+        raise ModelError(f"model {model!r} unknown; choose one of {', '.join(ESTIMATORS)}")
+    if model == "preisach":
+        return PreisachEstimator(n_levels=operators or 20, method=preisach_method)  # type: ignore[arg-type]
+    if model == "pi":
+        return PIEstimator(n_operators=operators or 25, parameterisation=parameterisation)  # type: ignore[arg-type]
+    if parameterisation != "free":
+        raise ModelError(f"--parameterisation {parameterisation} applies to the pi model only")
+    return ESTIMATORS[model](n_operators=operators or 25)
+
+
+@dataclass
+class TestResult:
+    """A model's prediction on one held-out recording."""
+
+    name: str
+    prediction: Prediction
+
+
+def score_on(
+    model: HysteresisModel, recordings: list[Measurement], calibration_fraction: float = 0.1
+) -> list[TestResult]:
+    """Predict each recording from an estimated initial state (see :mod:`host.evaluate`)."""
+    return [
+        TestResult(
+            Path(m.source).name,
+            predict_unknown_start(model, m.u, m.y, calibration_fraction=calibration_fraction),
+        )
+        for m in recordings
+    ]
+
+
+def rest_state(model: HysteresisModel, lowest_input: float) -> tuple[HysteresisModel, HysteresisModel]:
+    """Forward model and its inverse, both at the vented rest state (lowest input, from above).
+
+    This is the state the edge arms in (valve vented, pressure at its minimum), so the tables
+    written to a bundle start consistent with each other and with the rig.
+    """
+    model.reset(lowest_input, "descending")
+    inverse = model.inverse()
+    inverse.reset(inverse.input_range[0], "descending")
+    return model, inverse
+
+
+def save_bundle(
+    estimator: Estimator,
+    train: Measurement,
+    directory: str | Path,
+    units: tuple[str, str],
+    record: dict[str, object],
+) -> Path:
+    """Write the fitted model and its inverse as a bundle at ``directory``."""
+    forward, inverse = rest_state(estimator.model_, float(train.u.min()))
+    return write_bundle(directory, forward, inverse, units=units, fit_record=record)

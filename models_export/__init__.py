@@ -1,0 +1,1 @@
+"""Export of identified models into bundles the edge loads (lookup tables today)."""
