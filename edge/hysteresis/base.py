@@ -25,8 +25,13 @@ from numpy.typing import ArrayLike, NDArray
 from edge.errors import ModelError
 
 Branch = Literal["ascending", "descending", "centered"]
-"""Initial memory for ``reset``: arrived at ``u0`` from far below, from far above, or with no
-memory at all (a demagnetised state centred on ``u0``)."""
+"""Initial memory for ``reset``: arrived at ``u0`` from the bottom of the model's range
+(negative saturation), from its top (positive saturation), or demagnetised around ``u0`` by a
+decaying alternation inside the range. Every state is one a real input inside the range can
+produce, so a forward model and its inverse reset with the same branch at corresponding
+points (``u0`` and the forward output at ``u0``) hold the same memory."""
+
+DEMAGNETISE_CYCLES = 64
 
 BRANCHES: tuple[str, ...] = ("ascending", "descending", "centered")
 
@@ -55,6 +60,28 @@ def check_range(lo: float, hi: float, what: str) -> tuple[float, float]:
     return lo, hi
 
 
+_FLAG_TOLERANCE = 1e-9
+
+
+def clamp_and_flag(u: float, lo: float, hi: float) -> tuple[float, bool]:
+    """``u`` clamped to ``[lo, hi]`` and whether it was beyond by more than rounding.
+
+    Overshoot below ``1e-9 * (1 + |bound|)`` is clamped silently: it is what a forward model's
+    output at the end of its range looks like after floating-point rounding.
+    """
+    if u < lo:
+        return lo, lo - u > _FLAG_TOLERANCE * (1.0 + abs(lo))
+    if u > hi:
+        return hi, u - hi > _FLAG_TOLERANCE * (1.0 + abs(hi))
+    return u, False
+
+
+def clip_signal(signal: NDArray[np.float64], lo: float, hi: float) -> tuple[NDArray[np.float64], bool]:
+    """A whole signal clamped to ``[lo, hi]`` and whether its last sample was flagged."""
+    clipped = np.clip(signal, lo, hi)
+    return clipped, bool(signal.size) and clamp_and_flag(float(signal[-1]), lo, hi)[1]
+
+
 class HysteresisModel(abc.ABC):
     """Interface shared by PI, MPI, DPI and Preisach models (see module docstring)."""
 
@@ -70,9 +97,28 @@ class HysteresisModel(abc.ABC):
     def step(self, u: float) -> float:
         """Advance one sample with input ``u`` and return the output."""
 
+    @property
+    def memory_range(self) -> tuple[float, float]:
+        """Finite input interval whose ends saturate the memory (default: ``input_range``)."""
+        return self.input_range
+
     @abc.abstractmethod
+    def _saturate(self, positive: bool) -> None:
+        """Set the state reached at the top (``positive``) or bottom of ``memory_range``."""
+
     def reset(self, u0: float = 0.0, branch: Branch = "ascending") -> None:
-        """Put the model into the memory state named by ``branch`` at input ``u0``."""
+        """Put the model into the memory state named by ``branch`` (see :data:`Branch`) at ``u0``."""
+        check_branch(branch)
+        lo, hi = self.memory_range
+        target = min(hi, max(lo, float(u0)))
+        self._saturate(positive=branch == "descending")
+        if branch == "centered":
+            for i in range(DEMAGNETISE_CYCLES, 0, -1):
+                amplitude = i / DEMAGNETISE_CYCLES * (hi - lo)
+                self.step(min(hi, target + amplitude))
+                self.step(max(lo, target - amplitude))
+        self.step(target)
+        self.saturated = False
 
     @abc.abstractmethod
     def get_state(self) -> dict[str, NDArray[np.float64]]:
@@ -101,11 +147,5 @@ class HysteresisModel(abc.ABC):
 
     def _clamp(self, u: float) -> float:
         lo, hi = self.input_range
-        if u < lo:
-            self.saturated = True
-            return lo
-        if u > hi:
-            self.saturated = True
-            return hi
-        self.saturated = False
-        return u
+        value, self.saturated = clamp_and_flag(u, lo, hi)
+        return value

@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from edge.errors import ModelError
-from edge.hysteresis.base import Branch, HysteresisModel, as_signal, check_branch, check_range
+from edge.hysteresis.base import HysteresisModel, as_signal, check_range
 from edge.hysteresis.table import LookupTable
 
 _TINY = 1e-300
@@ -201,22 +201,12 @@ class DPIModel(HysteresisModel):
     def step(self, u: float) -> float:
         return self._kernel.step(self._clamp(float(u)))
 
-    def reset(self, u0: float = 0.0, branch: Branch = "ascending") -> None:
-        check_branch(branch)
-        x = self._clamp(float(u0))
+    def _saturate(self, positive: bool) -> None:
         x0, y0, x1, y1 = self.anchors
         k = self._kernel
         k.direction, k.bx, k.by = 0, 1.0, 1.0
-        if branch == "centered":
-            frac = (x - x0) / (x1 - x0)
-            k.s = [frac] * self.n_operators
-            k.x, k.y = x, y0 + frac * (y1 - y0)
-        elif branch == "ascending":
-            k.s, k.x, k.y = [0.0] * self.n_operators, x0, y0
-            k.step(x)
-        else:
-            k.s, k.x, k.y = [1.0] * self.n_operators, x1, y1
-            k.step(x)
+        k.s = [1.0 if positive else 0.0] * self.n_operators
+        k.x, k.y = (x1, y1) if positive else (x0, y0)
 
     def get_state(self) -> dict[str, NDArray[np.float64]]:
         arrays = self._kernel.arrays()

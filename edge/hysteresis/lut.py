@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from edge.errors import BundleError
-from edge.hysteresis.base import as_signal
+from edge.hysteresis.base import as_signal, clamp_and_flag
 from edge.hysteresis.dpi import DPIKernel
 from edge.hysteresis.pi import PlayKernel
 from edge.hysteresis.preisach import PreisachKernel
@@ -97,12 +97,10 @@ class CompiledModel:
 
     def step(self, u: float) -> float:
         lo, hi = self.input_range
-        if u < lo:
-            u, self.saturated = lo, True
-        elif u > hi:
-            u, self.saturated = hi, True
-        else:
+        if lo <= u <= hi:
             self.saturated = False
+        else:
+            u, self.saturated = clamp_and_flag(u, lo, hi)
         for stage_step in self._steps:
             u = stage_step(u)
         return u

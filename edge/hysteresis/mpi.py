@@ -13,7 +13,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from edge.hysteresis.base import Branch, HysteresisModel, as_signal
+from edge.hysteresis.base import Branch, HysteresisModel, as_signal, clip_signal
 from edge.hysteresis.pi import PIModel
 from edge.hysteresis.shaper import MonotonePiecewiseLinear
 from edge.hysteresis.table import LookupTable
@@ -35,15 +35,21 @@ class MPIModel(HysteresisModel):
         self.shaper = shaper
         self.shaper_first = shaper_first
 
+    def _outer(self, bounds: tuple[float, float]) -> tuple[float, float]:
+        """PI-input bounds as bounds of this model's input (through the shaper if it comes first)."""
+        if not self.shaper_first:
+            return bounds
+        inverse = self.shaper.inverse()
+        lo, hi = (float(inverse(np.array([b]))[0]) if math.isfinite(b) else b for b in bounds)
+        return lo, hi
+
     @property
     def input_range(self) -> tuple[float, float]:
-        lo, hi = self.pi.input_range
-        if not self.shaper_first:
-            return lo, hi
-        # the PI part sees shaper(u): map its bounds back through the shaper
-        inverse = self.shaper.inverse()
-        ends = [float(inverse(np.array([b]))[0]) if math.isfinite(b) else b for b in (lo, hi)]
-        return ends[0], ends[1]
+        return self._outer(self.pi.input_range)
+
+    @property
+    def memory_range(self) -> tuple[float, float]:
+        return self._outer(self.pi.memory_range)
 
     def _shaper_scalar(self, x: float) -> float:
         return float(self.shaper(np.array([x]))[0])
@@ -56,15 +62,19 @@ class MPIModel(HysteresisModel):
 
     def simulate(self, u: ArrayLike) -> NDArray[np.float64]:
         signal = as_signal(u)
-        clipped = np.clip(signal, *self.input_range)
-        self.saturated = bool(signal.size and clipped[-1] != signal[-1])
+        clipped, self.saturated = clip_signal(signal, *self.input_range)
         if self.shaper_first:
             return self.pi.simulate(self.shaper(clipped))
         return self.shaper(self.pi.simulate(clipped))
 
+    def _saturate(self, positive: bool) -> None:
+        self.pi._saturate(positive)
+
     def reset(self, u0: float = 0.0, branch: Branch = "ascending") -> None:
+        """The memory is the PI part's: reset it at the PI input corresponding to ``u0``."""
         u0 = self._clamp(float(u0))
         self.pi.reset(self._shaper_scalar(u0) if self.shaper_first else u0, branch)
+        self.saturated = False
 
     def get_state(self) -> dict[str, NDArray[np.float64]]:
         return self.pi.get_state()

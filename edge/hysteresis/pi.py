@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from edge.errors import ModelError
-from edge.hysteresis.base import Branch, HysteresisModel, as_signal, check_branch, check_range
+from edge.hysteresis.base import Branch, HysteresisModel, as_signal, check_branch, check_range, clip_signal
 from edge.hysteresis.table import LookupTable
 
 
@@ -78,7 +78,11 @@ def play_outputs(
 
 
 def branch_play_state(x0: float, thresholds: NDArray[np.float64], branch: Branch) -> NDArray[np.float64]:
-    """Play outputs at input ``x0`` after arriving from far below / far above / no memory."""
+    """Play outputs at input ``x0`` after arriving from far below / far above / with no memory.
+
+    "Far" means more than twice the largest threshold away: the saturated states used by
+    identification at the ends of a recording's range.
+    """
     check_branch(branch)
     if branch == "ascending":
         return x0 - thresholds
@@ -158,15 +162,26 @@ class PIModel(HysteresisModel):
         self._z = np.zeros_like(self.thresholds)
         self._lo = np.empty_like(self._z)
         self._hi = np.empty_like(self._z)
-        self.reset(0.0, "centered")
+        self._z[:] = 0.0  # eq 4 with y0 = 0 (memory-free at 0)
 
     @property
     def input_range(self) -> tuple[float, float]:
         return self._input_range
 
-    def reset(self, u0: float = 0.0, branch: Branch = "ascending") -> None:
-        x0 = self._clamp(float(u0)) - self.input_shift
-        self._z[:] = branch_play_state(x0, self.thresholds, branch)
+    @property
+    def memory_range(self) -> tuple[float, float]:
+        """``actuator_range``, or, if unbounded, far enough that every play saturates."""
+        lo, hi = self.actuator_range
+        if math.isfinite(lo) and math.isfinite(hi):
+            return lo, hi
+        reach = 2.0 * float(self.thresholds[-1]) + 1.0
+        return -reach + self.input_shift, reach + self.input_shift
+
+    def _saturate(self, positive: bool) -> None:
+        lo, hi = self.memory_range
+        self._z[:] = branch_play_state(
+            (hi if positive else lo) - self.input_shift, self.thresholds, "ascending" if positive else "descending"
+        )
 
     def get_state(self) -> dict[str, NDArray[np.float64]]:
         return {"plays": self._z.copy()}
@@ -188,8 +203,7 @@ class PIModel(HysteresisModel):
 
     def simulate(self, u: ArrayLike) -> NDArray[np.float64]:
         signal = as_signal(u)
-        clipped = np.clip(signal, *self.input_range)
-        self.saturated = bool(signal.size and clipped[-1] != signal[-1])
+        clipped, self.saturated = clip_signal(signal, *self.input_range)
         plays = play_outputs(clipped - self.input_shift, self.thresholds, self._z)
         if plays.shape[0]:
             self._z[:] = plays[-1]

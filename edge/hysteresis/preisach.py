@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from edge.errors import ModelError
-from edge.hysteresis.base import Branch, HysteresisModel, check_branch, check_range
+from edge.hysteresis.base import HysteresisModel, check_range
 from edge.hysteresis.table import LookupTable
 
 
@@ -272,21 +272,6 @@ class PreisachModel(HysteresisModel):
         else:
             k.su[1], k.sy[1] = lo, self.y_min
             k.depth, k.rising, k.u, k.y = 2, True, lo, self.y_min
-
-    def reset(self, u0: float = 0.0, branch: Branch = "ascending") -> None:
-        """``u0`` is an input of this model (an output level for an inverse model)."""
-        check_branch(branch)
-        target = self._clamp(float(u0))
-        self._saturate(positive=branch == "descending")
-        if branch == "centered":  # AC demagnetisation: decaying alternation around target
-            lo, hi = self.input_range
-            levels = self.n_levels
-            for i in range(levels, 0, -1):
-                amplitude = i / levels * (hi - lo)
-                self.step(min(hi, target + amplitude))
-                self.step(max(lo, target - amplitude))
-        self.step(target)
-        self.saturated = False
 
     def get_state(self) -> dict[str, NDArray[np.float64]]:
         a = self._kernel.arrays()

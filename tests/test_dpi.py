@@ -1,0 +1,101 @@
+"""DPI laws (seed 002): digitized state, equivalence with PI, compensator, exact inverse."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+
+from edge.errors import ModelError
+from edge.hysteresis.dpi import DPIModel
+from edge.hysteresis.pi import PIModel
+from tests.conftest import random_walk
+from tests.strategies import random_dpi, random_pi, seeds
+
+
+def dpi_from_pi(pi: PIModel, half_range: float) -> DPIModel:
+    """Symmetric DPI of a PI model centred on 0: dX_i = 2(r_{i+1} - r_i), dY_i = dX_i S_i."""
+    r = np.r_[pi.thresholds, half_range]
+    dx = 2 * np.diff(r)
+    dy = dx * np.cumsum(pi.weights)
+    y0 = float(pi.weights @ (-half_range + pi.thresholds))
+    return DPIModel(dx, dy, dx, dy, x0=-half_range, y0=y0)
+
+
+@given(seeds)
+def test_symmetric_dpi_is_the_classical_pi_model(seed):
+    rng = np.random.default_rng(seed)
+    pi = random_pi(rng, -2.5, 2.5)
+    pi = PIModel(pi.thresholds, np.abs(pi.weights) + 0.01, actuator_range=(-2.5, 2.5))
+    dpi = dpi_from_pi(pi, 2.5)
+    u = random_walk(rng, 500, -2.5, 2.5, 0.5)
+    for branch in ("ascending", "descending"):
+        pi.reset(u[0], branch)
+        dpi.reset(u[0], branch)
+        np.testing.assert_allclose(dpi.simulate(u), pi.simulate(u), atol=1e-9)
+
+
+def test_whole_digit_steps_give_a_binary_state():
+    """Moving by whole digit widths from B0 leaves every digit at 0 or 1 (the paper's b_i)."""
+    model = DPIModel([1.0, 1.0, 1.0], [1.0, 2.0, 3.0], [1.0, 1.0, 1.0], [1.5, 2.0, 2.5], x0=0.0, y0=0.0)
+    model.reset(0.0, "ascending")
+    for u in (2.0, 1.0, 3.0, 0.0, 1.0, 2.0, 1.0):
+        model.step(u)
+        assert set(model.get_state()["fills"].tolist()) <= {0.0, 1.0}
+
+
+def test_expansion_fills_the_least_significant_digit_first():
+    model = DPIModel([1.0, 1.0], [1.0, 3.0], [1.0, 1.0], [2.0, 2.0], x0=0.0, y0=0.0, compensate=False)
+    model.reset(0.0, "ascending")
+    assert model.step(1.0) == pytest.approx(1.0)  # digit 1: slope dYe_1/dXe_1 = 1
+    assert model.step(2.0) == pytest.approx(4.0)  # digit 2: slope 3
+    assert model.step(1.0) == pytest.approx(2.0)  # contraction empties digit 1 first: slope 2
+
+
+@settings(max_examples=60)
+@given(seeds)
+def test_inverse_by_swapping_pairs_is_exact(seed):
+    rng = np.random.default_rng(seed)
+    model = random_dpi(rng)
+    lo, hi = model.input_range
+    u = random_walk(rng, 500, lo, hi, 0.2 * (hi - lo))
+    model.reset(u[0], "ascending")
+    inverse = model.inverse()
+    np.testing.assert_allclose(inverse.simulate(model.simulate(u)), u, atol=1e-9 * (1 + abs(hi) + abs(lo)))
+
+
+def test_drift_is_bounded_with_the_compensator_and_grows_without():
+    rng = np.random.default_rng(7)
+    dxe = np.full(6, 1.0)
+    dye = rng.uniform(0.5, 1.5, 6)
+    dyc = dye * rng.uniform(0.6, 0.9, 6)  # contraction systematically smaller: upward drift
+    kwargs = dict(x0=0.0, y0=0.0, x1=6.0, y1=float(dye.sum()))
+    compensated = DPIModel(dxe, dye, dxe, dyc, **kwargs)
+    raw = DPIModel(dxe, dye, dxe, dyc, compensate=False, **kwargs)
+    cycles = 10_000
+    centres = rng.uniform(1.0, 5.0, cycles)
+    amplitudes = rng.uniform(0.1, 1.0, cycles)
+    u = np.empty(2 * cycles)
+    u[0::2] = np.clip(centres + amplitudes, 0, 6)
+    u[1::2] = np.clip(centres - amplitudes, 0, 6)
+    for model in (compensated, raw):
+        model.reset(3.0, "ascending")
+    y_comp = compensated.simulate(u)
+    y_raw = raw.simulate(u)
+    assert y_comp.min() >= -1e-9 and y_comp.max() <= kwargs["y1"] + 1e-9
+    first, last = y_raw[: cycles // 10], y_raw[-cycles // 10 :]
+    assert last.mean() - first.mean() > 10 * kwargs["y1"]  # grows by far more than the range
+
+
+def test_out_of_range_input_is_clamped_and_flagged():
+    model = random_dpi(np.random.default_rng(1))
+    inverse = model.inverse()
+    inverse.reset(inverse.input_range[0], "ascending")
+    assert inverse.step(inverse.input_range[1] + 10) == pytest.approx(model.input_range[1])
+    assert inverse.saturated
+    assert np.isfinite(inverse.step(-1e300)) and inverse.saturated
+
+
+def test_flat_pairs_are_refused():
+    with pytest.raises(ModelError, match="dye must be > 0"):
+        DPIModel([1.0], [0.0], [1.0], [1.0], x0=0.0, y0=0.0)
