@@ -52,6 +52,15 @@ def branch_regressors(fills: NDArray[np.float64]) -> tuple[NDArray[np.float64], 
 class DPIEstimator:
     """Identify a :class:`~edge.hysteresis.dpi.DPIModel`.
 
+    As in seed 002, the pairs are identified from the branches without the compensator (one
+    bounded least-squares problem) and the compensator acts online, at turning points, to keep
+    the model from drifting. On a closed major loop it is inactive; on minor loops of an
+    asymmetric model it rescales the branch, so the deployed model's minor loops can differ
+    slightly from the regression's (``train_prediction_`` is the deployed, compensated model).
+    A fit with the compensator in the loop is a fixed point of "regress with the branch scales
+    frozen"; that iteration does not contract, and a proper Gauss-Newton needs the scale
+    derivatives through every branch: left for when data shows the gain is worth it.
+
     Args:
         n_operators: number of digits ``N``.
         closure_weight: weight of the soft constraint ``sum dYe = sum dYc`` relative to one
@@ -75,17 +84,14 @@ class DPIEstimator:
             target = y_arr[start.index :]
             x0, x1 = float(u_arr.min()), float(u_arr.max())
             dx = (x1 - x0) / n
-            fills = digit_fills(u_arr, dx, n, start)
-            gained, lost = branch_regressors(fills)
+            gained, lost = branch_regressors(digit_fills(u_arr, dx, n, start))
             design = np.column_stack([gained, -lost, np.ones(len(target))])
             closure = np.sqrt(self.closure_weight * len(target)) * np.r_[np.ones(n), -np.ones(n), 0.0]
             floor = self.min_slope_ratio * average_slope(u_arr, y_arr) * dx
             x = bounded_lsq(np.vstack([design, closure]), np.r_[target, 0.0], np.r_[np.full(2 * n, floor), -np.inf])
             dye, dyc, y_start = x[:n], x[n : 2 * n], float(x[2 * n])
-            if start.branch == "descending":  # started at B0
-                y0 = y_start
-            else:  # started at B1
-                y0 = y_start - float(dyc.sum())
+            # the record starts at B0 (bottom of the range) or B1 (top); y0 is the output at B0
+            y0 = y_start if start.branch == "descending" else y_start - float(dyc.sum())
             widths = np.full(n, dx)
             model = DPIModel(widths, dye, widths, dyc, x0=x0, y0=y0, x1=x1, y1=y0 + float(dye.sum()))
             model.reset(float(u_arr[start.index]), start.branch)

@@ -132,8 +132,12 @@ def regressor_chunks(u: NDArray[np.float64], grid: EverettGrid, start: MemorySta
 def forc_everett(u: NDArray[np.float64], y: NDArray[np.float64], grid: EverettGrid) -> NDArray[np.float64]:
     """Everett nodes from the first-order descending curves in ``(u, y)``; see module docstring."""
     moving = np.flatnonzero(np.diff(u) != 0)
+    if moving.size == 0:
+        raise DataError("the input never moves; first-order reversal curves need sweeps")
     direction = np.sign(np.diff(u)[moving])
-    turns = moving[np.flatnonzero(np.diff(direction) != 0) + 1]  # index where a new run starts
+    # every run's first sample (an extremum), plus the record's last sample closing the last run
+    starts = moving[np.r_[0, np.flatnonzero(np.diff(direction) != 0) + 1]]
+    turns = np.r_[starts, u.size - 1]
     levels = grid.lo + grid.h * np.arange(grid.n + 1)
     band = 0.02 * (grid.hi - grid.lo)
     curves: list[tuple[float, NDArray[np.float64]]] = []
@@ -151,14 +155,12 @@ def forc_everett(u: NDArray[np.float64], y: NDArray[np.float64], grid: EverettGr
             f"only {len(curves)} first-order reversal curves found (descending branches that start "
             "on the ascending major branch); record FORCs or use method='lsq'"
         )
-    alphas = np.array([c[0] for c in curves])
     everett = np.zeros((grid.n + 1, grid.n + 1))
     for k in range(grid.n):
         known_alpha = [levels[k]] + [a for a, e in curves if e.size > k]
         known_e = [0.0] + [float(e[k]) for a, e in curves if e.size > k]
         order = np.argsort(known_alpha)
         everett[k + 1 :, k] = np.interp(levels[k + 1 :], np.array(known_alpha)[order], np.array(known_e)[order])
-    del alphas
     return everett
 
 

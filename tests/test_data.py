@@ -1,0 +1,85 @@
+"""Measured-data loader: one clear error per problem, resampling said out loud."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from edge.errors import DataError
+from host.data import ResampledWarning, load_measurement
+
+
+def write(tmp_path, text, name="d.csv"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def rows(n=20, dt=0.01):
+    return "\n".join(f"{i * dt:.4f},{np.sin(i / 3):.4f},{np.cos(i / 3):.4f}" for i in range(n))
+
+
+def test_loads_required_and_optional_columns(tmp_path):
+    body = "\n".join(f"{i * 0.01:.2f},{i},{2 * i},{0.5},{20 + i}" for i in range(20))
+    m = load_measurement(write(tmp_path, "t,u,y,load,temperature\n" + body))
+    assert len(m) == 20 and m.dt == pytest.approx(0.01)
+    assert set(m.extras) == {"load", "temperature"}
+    np.testing.assert_allclose(m.y, 2 * m.u)
+
+
+def test_missing_column_names_what_was_found(tmp_path):
+    with pytest.raises(DataError, match=r"column\(s\) 'y' missing; found \['t', 'u', 'x'\]"):
+        load_measurement(write(tmp_path, "t,u,x\n" + rows()))
+
+
+def test_nan_rows_are_refused_with_their_line_numbers(tmp_path):
+    text = "t,u,y\n" + rows(5) + "\n0.05,nan,1\n0.06,1,\n" + rows(20, 0.01).split("\n", 7)[-1]
+    with pytest.raises(DataError, match=r"2 row\(s\) with NaN.*file lines 7, 8"):
+        load_measurement(write(tmp_path, text))
+
+
+def test_non_increasing_time_is_refused(tmp_path):
+    text = "t,u,y\n0,1,1\n0.1,1,1\n0.1,2,2\n" + "\n".join(f"{0.2 + i / 10},1,1" for i in range(20))
+    with pytest.raises(DataError, match="not strictly increasing at file line 4"):
+        load_measurement(write(tmp_path, text))
+
+
+def irregular(tmp_path):
+    rng = np.random.default_rng(0)
+    t = np.cumsum(rng.uniform(0.01, 0.03, 200))
+    return write(tmp_path, "t,u,y\n" + "\n".join(f"{ti},{np.sin(ti)},{np.cos(ti)}" for ti in t))
+
+
+def test_irregular_sampling_is_resampled_with_a_warning(tmp_path):
+    with pytest.warns(ResampledWarning, match="resampled from irregular steps"):
+        m = load_measurement(irregular(tmp_path))
+    assert np.ptp(np.diff(m.t)) < 1e-9
+    assert m.notes and "linear interpolation" in m.notes[0]
+    np.testing.assert_allclose(m.u, np.sin(m.t), atol=2e-4)
+
+
+def test_irregular_sampling_can_be_refused(tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(DataError, match="irregular sampling"):
+            load_measurement(irregular(tmp_path), irregular="refuse")
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [("", "file is empty"), ("t,u,y\n0,1,2\n0.1,1,2\n", "only 2 samples"), ("t;u;y\n0;1;2\n", "missing")],
+)
+def test_unusable_files(tmp_path, content, message):
+    with pytest.raises(DataError, match=message):
+        load_measurement(write(tmp_path, content))
+
+
+def test_unreadable_file(tmp_path):
+    with pytest.raises(DataError, match="cannot read file"):
+        load_measurement(tmp_path / "absent.csv")
+    binary = tmp_path / "b.csv"
+    binary.write_bytes(b"\xff\xfe\x00\x81" * 10)
+    with pytest.raises(DataError):
+        load_measurement(binary)
