@@ -33,8 +33,8 @@ def test_piezo_identification_generalises_to_the_validation_runs(shared_data):
     results = load_piezo_table().piezo_results(piezo)
     for model, result in results.items():
         assert result["train_pct"] < 2.0, model
-        for run, score in result["runs"].items():
-            assert score.rmse_pct_pp < 7.0, (model, run, score)
+        for run, run_score in result["runs"].items():
+            assert run_score.rmse_pct_pp < 7.0, (model, run, run_score)
     assert results["preisach"]["train_pct"] < results["pi"]["train_pct"]
 
     train = load_measurement(piezo / "20_hz_no_lp.csv")
