@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from host.data import load_measurement
+from host.evaluate import score
 from host.workflow import make_estimator, score_on
 
 BENCH = Path(__file__).resolve().parents[1] / "bench" / "piezo_table.py"
