@@ -34,6 +34,8 @@ class MPIModel(HysteresisModel):
         self.pi = pi
         self.shaper = shaper
         self.shaper_first = shaper_first
+        self._input_range = self._outer(pi.input_range)
+        self._memory_range = self._outer(pi.memory_range)
 
     def _outer(self, bounds: tuple[float, float]) -> tuple[float, float]:
         """PI-input bounds as bounds of this model's input (through the shaper if it comes first)."""
@@ -45,20 +47,17 @@ class MPIModel(HysteresisModel):
 
     @property
     def input_range(self) -> tuple[float, float]:
-        return self._outer(self.pi.input_range)
+        return self._input_range
 
     @property
     def memory_range(self) -> tuple[float, float]:
-        return self._outer(self.pi.memory_range)
-
-    def _shaper_scalar(self, x: float) -> float:
-        return float(self.shaper(np.array([x]))[0])
+        return self._memory_range
 
     def step(self, u: float) -> float:
         u = self._clamp(float(u))
         if self.shaper_first:
-            return self.pi.step(self._shaper_scalar(u))
-        return self._shaper_scalar(self.pi.step(u))
+            return self.pi.step(self.shaper.scalar(u))
+        return self.shaper.scalar(self.pi.step(u))
 
     def simulate(self, u: ArrayLike) -> NDArray[np.float64]:
         signal = as_signal(u)
@@ -73,7 +72,7 @@ class MPIModel(HysteresisModel):
     def reset(self, u0: float = 0.0, branch: Branch = "ascending") -> None:
         """The memory is the PI part's: reset it at the PI input corresponding to ``u0``."""
         u0 = self._clamp(float(u0))
-        self.pi.reset(self._shaper_scalar(u0) if self.shaper_first else u0, branch)
+        self.pi.reset(self.shaper.scalar(u0) if self.shaper_first else u0, branch)
         self.saturated = False
 
     def get_state(self) -> dict[str, NDArray[np.float64]]:

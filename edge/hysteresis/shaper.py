@@ -53,6 +53,8 @@ class MonotonePiecewiseLinear:
             raise ModelError("shaper is not strictly increasing; constrain the dead-zone slopes to be positive")
         if not (self.slope_left > 0 and self.slope_right > 0):
             raise ModelError(f"shaper end slopes must be > 0; got {slope_left}, {slope_right}")
+        self.scalar = PiecewiseLinearKernel(self.kernel_stage()[1]).step
+        """Evaluate one value (binary search over the knots, no array allocation)."""
 
     @classmethod
     def from_dead_zones(cls, thresholds: ArrayLike, weights: ArrayLike) -> MonotonePiecewiseLinear:

@@ -30,7 +30,7 @@ from host.identify.common import (
 )
 from host.identify.pi import start_plays, uniform_thresholds
 
-REFINE_ROWS = 20_000
+REFINE_ROWS = 8_000  # 10^5 samples: 0.9 s, RMSE within 0.2 % of refining on all rows
 
 
 def segment_lengths(y: NDArray[np.float64], knots: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -168,7 +168,9 @@ class MPIEstimator:
         lower, upper = lower.copy(), upper.copy()
         lower[n + 1], upper[n + 1] = 1.0 - 1e-12, 1.0 + 1e-12
         theta0 = np.clip(np.r_[weights, offset, slopes], lower, upper)
-        result = least_squares(residual, theta0, jac=jacobian, bounds=(lower, upper), method="trf", max_nfev=300)
+        result = least_squares(
+            residual, theta0, jac=jacobian, bounds=(lower, upper), method="trf", tr_solver="lsmr", max_nfev=300
+        )
         w, b, c = unpack(result.x)
         self.refine_cost_ratio_ = float(result.cost / max(0.5 * residual(theta0) @ residual(theta0), 1e-300))
         return w, b, c
