@@ -155,3 +155,22 @@ def test_memory_is_known_from_the_first_range_end():
     u = np.r_[2.0, 3.0, 1.0, 0.0, 4.0, 2.0]
     start = memory_start(u)
     assert (start.index, start.branch) == (3, "descending")
+
+
+@pytest.mark.parametrize(
+    "estimator, tolerance",
+    [(PIEstimator(), 1e-6), (DPIEstimator(), 1e-6), (MPIEstimator(), 1e-2), (PreisachEstimator(), 1e-2)],
+)
+def test_a_record_starting_just_inside_its_range_end_fits_like_one_starting_at_it(estimator, tolerance):
+    """memory_start accepts the first sample within 0.5 % of a range end; the model's start
+    state and output level must then match the regression's (DPI's output level used to
+    assume the exact end, and was off by the part of the last digit not yet filled)."""
+    core = signal()[1:]
+    top = int(core.argmax())
+    u = np.r_[core.max() - 0.015, core[top:], core[:top]]  # starts 0.375 % of the range below the max
+    thresholds = uniform_thresholds(u, 25)[::5]  # a subset of the estimators' grids: exact fits exist
+    truth = PIModel(thresholds, 0.7 * np.exp(-0.5 * thresholds))
+    y = truth_output(truth, u)
+    est = estimator.fit(u, y)
+    assert est.start_index_ == 0
+    assert np.sqrt(np.mean((est.train_prediction_ - y) ** 2)) < tolerance * np.ptp(y)

@@ -90,9 +90,12 @@ class DPIEstimator:
             floor = self.min_slope_ratio * average_slope(u_arr, y_arr) * dx
             x = bounded_lsq(np.vstack([design, closure]), np.r_[target, 0.0], np.r_[np.full(2 * n, floor), -np.inf])
             dye, dyc, y_start = x[:n], x[n : 2 * n], float(x[2 * n])
-            # the record starts at B0 (bottom of the range) or B1 (top); y0 is the output at B0
-            y0 = y_start if start.branch == "descending" else y_start - float(dyc.sum())
+            # y_start is the output in the start state; the model is translation invariant in y,
+            # so build it at y0 = 0, read its output in that state and shift by the difference
             widths = np.full(n, dx)
+            probe = DPIModel(widths, dye, widths, dyc, x0=x0, y0=0.0, x1=x1, y1=float(dye.sum()))
+            probe.reset(float(u_arr[start.index]), start.branch)
+            y0 = y_start - probe.step(float(u_arr[start.index]))
             model = DPIModel(widths, dye, widths, dyc, x0=x0, y0=y0, x1=x1, y1=y0 + float(dye.sum()))
             model.reset(float(u_arr[start.index]), start.branch)
             self.train_prediction_ = model.simulate(u_arr[start.index :])

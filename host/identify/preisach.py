@@ -90,9 +90,11 @@ def regressor_chunks(u: NDArray[np.float64], grid: EverettGrid, start: MemorySta
     full = np.zeros(grid.size)
     full[grid.flat[grid.n, 0]] = 1.0  # y(hi) = y_min + E(hi, lo)
     stack_u[0], stack_rows[0] = hi, full
-    if start.branch == "ascending":  # positive saturation
+    # as PreisachModel.reset: "descending" falls from positive saturation to the first sample,
+    # "ascending" rises from negative saturation
+    if start.branch == "descending":
         depth, rising, cur_u, cur_row = 1, False, hi, full.copy()
-    else:  # negative saturation
+    else:
         stack_u[1] = lo
         depth, rising, cur_u, cur_row = 2, True, lo, np.zeros(grid.size)
     signal = np.clip(u[start.index :], lo, hi)
