@@ -58,22 +58,24 @@ def inverse_pi_parameters(thresholds: ArrayLike, weights: ArrayLike) -> tuple[ND
 
 
 def play_outputs(
-    x: NDArray[np.float64], thresholds: NDArray[np.float64], z0: NDArray[np.float64]
+    x: NDArray[np.float64], thresholds: NDArray[np.float64], z0: NDArray[np.float64], chunk: int = 65_536
 ) -> NDArray[np.float64]:
     """Play-operator outputs for every sample (rows) and threshold (columns).
 
-    Loops over time with numpy work across operators; ``z0`` is the state before ``x[0]``.
+    Loops over time with numpy work across operators (two calls per sample: the bounds
+    ``x -+ r`` are precomputed a chunk at a time); ``z0`` is the state before ``x[0]``.
     """
     out = np.empty((x.size, thresholds.size))
-    z = z0.astype(float).copy()
-    lo = np.empty_like(z)
-    hi = np.empty_like(z)
-    for k, xk in enumerate(x.tolist()):
-        np.subtract(xk, thresholds, out=lo)
-        np.add(xk, thresholds, out=hi)
-        np.maximum(z, lo, out=z)
-        np.minimum(z, hi, out=z)
-        out[k] = z
+    previous = z0.astype(float).copy()
+    for start in range(0, x.size, chunk):
+        block = x[start : start + chunk, None]
+        lower, upper = block - thresholds, block + thresholds
+        rows = out[start : start + chunk]
+        for k in range(rows.shape[0]):
+            row = rows[k]
+            np.maximum(previous, lower[k], out=row)
+            np.minimum(row, upper[k], out=row)
+            previous = row
     return out
 
 
