@@ -32,9 +32,11 @@ def make_estimator(
         return PreisachEstimator(n_levels=operators or 20, method=preisach_method)  # type: ignore[arg-type]
     if model == "pi":
         return PIEstimator(n_operators=operators or 25, parameterisation=parameterisation)  # type: ignore[arg-type]
+    if model == "mpi":
+        return MPIEstimator(n_operators=operators or 25, parameterisation=parameterisation)  # type: ignore[arg-type]
     if parameterisation != "free":
-        raise ModelError(f"--parameterisation {parameterisation} applies to the pi model only")
-    return ESTIMATORS[model](n_operators=operators or 25)
+        raise ModelError(f"--parameterisation {parameterisation} applies to the pi and mpi models only")
+    return DPIEstimator(n_operators=operators or 25)
 
 
 @dataclass

@@ -50,7 +50,7 @@ def test_fit_saves_a_bundle_the_edge_loads(tmp_path, capsys):
     [
         (["fit", "--model", "pi", "--train", "missing.csv"], "missing.csv: cannot read file"),
         (["fit", "--model", "pi", "--train", TRAIN, "--units", "bar"], "--units"),
-        (["fit", "--model", "mpi", "--train", TRAIN, "--parameterisation", "exponential"], "pi model only"),
+        (["fit", "--model", "dpi", "--train", TRAIN, "--parameterisation", "exponential"], "pi and mpi models only"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(args, message):

@@ -174,3 +174,14 @@ def test_a_record_starting_just_inside_its_range_end_fits_like_one_starting_at_i
     est = estimator.fit(u, y)
     assert est.start_index_ == 0
     assert np.sqrt(np.mean((est.train_prediction_ - y) ** 2)) < tolerance * np.ptp(y)
+
+
+def test_mpi_exponential_parameterisation_recovers_beta_and_mu():
+    u = signal()
+    thresholds, weights = exponential_pi_parameters(10, beta=0.17, delta=0.9, mu=0.6)
+    shaper = MonotonePiecewiseLinear.from_dead_zones([0.0, 1.0, 2.0], [1.0, 0.6, -0.5])
+    y = truth_output(MPIModel(PIModel(thresholds, weights), shaper), u)
+    est = MPIEstimator(n_operators=10, n_dead_zones=12, parameterisation="exponential").fit(u, y)
+    assert est.beta_ == pytest.approx(0.17, rel=0.02)
+    assert est.mu_ == pytest.approx(0.6, rel=0.1)
+    assert np.sqrt(np.mean((est.train_prediction_ - y) ** 2)) < 0.005 * np.ptp(y)

@@ -50,7 +50,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--parameterisation",
         choices=["free", "exponential"],
         default="free",
-        help="pi only: free weights or seed 000's beta/delta/mu form",
+        help="pi and mpi: free play weights or seed 000's beta/delta/mu form",
     )
     fit.add_argument(
         "--preisach-method",

@@ -12,15 +12,18 @@
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
 from edge.errors import ModelError
 from edge.hysteresis.mpi import MPIModel
-from edge.hysteresis.pi import PIModel
+from edge.hysteresis.pi import PIModel, exponential_pi_parameters
 from edge.hysteresis.shaper import MonotonePiecewiseLinear
 from host.identify.common import (
+    MemoryStart,
     Stopwatch,
     average_slope,
     bounded_lsq,
@@ -28,7 +31,7 @@ from host.identify.common import (
     memory_start,
     training_signals,
 )
-from host.identify.pi import start_plays, uniform_thresholds
+from host.identify.pi import exponential_search, start_plays, uniform_thresholds
 
 REFINE_ROWS = 8_000  # 10^5 samples: 0.9 s, RMSE within 0.2 % of refining on all rows
 
@@ -57,6 +60,9 @@ class MPIEstimator:
         n_dead_zones: segments of the dead-zone shaper (seed 000 uses thresholds
             ``g_j = j/m * max``; here they are spread evenly over the output range).
         refine: run the output-error refinement (step 2).
+        parameterisation: PI weights ``"free"`` or seed 000's ``"exponential"``
+            (``w_i = delta exp(-mu beta i)``, thresholds ``beta i``; ``beta`` and ``mu`` searched
+            on the equation error, ``delta`` takes the place of the weights in both steps).
         min_slope_ratio: bounds ``w_0 >= ratio * average slope`` and shaper slopes
             ``ratio <= ds/dx <= 1/ratio``; see :data:`host.identify.common.MIN_SLOPE_DOC`.
     """
@@ -68,12 +74,16 @@ class MPIEstimator:
         n_dead_zones: int = 10,
         refine: bool = True,
         min_slope_ratio: float = 0.01,
+        parameterisation: Literal["free", "exponential"] = "free",
     ) -> None:
         if n_operators < 1 or n_dead_zones < 1:
             raise ModelError(f"need >= 1 operators and dead zones; got {n_operators}, {n_dead_zones}")
         self.n_operators = n_operators
         self.n_dead_zones = n_dead_zones
         self.refine = refine
+        if parameterisation not in ("free", "exponential"):
+            raise ModelError(f"parameterisation {parameterisation!r} unknown; use 'free' or 'exponential'")
+        self.parameterisation = parameterisation
         self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
 
     def fit(self, u: ArrayLike, y: ArrayLike) -> MPIEstimator:
@@ -81,15 +91,21 @@ class MPIEstimator:
         with Stopwatch() as watch:
             start = memory_start(u_arr)
             target = y_arr[start.index :]
-            thresholds = uniform_thresholds(u_arr, self.n_operators)
-            plays = start_plays(u_arr, thresholds, start)
             knots = np.linspace(target.min(), target.max(), self.n_dead_zones + 2)
-            lower, upper = self._bounds(average_slope(u_arr, y_arr), knots.size - 1)
-            weights, offset, slopes = self._equation_error(plays, target, knots, lower, upper)
+            slope = average_slope(u_arr, y_arr)
+            if self.parameterisation == "free":
+                thresholds = uniform_thresholds(u_arr, self.n_operators)
+                shape = np.eye(self.n_operators)  # one coefficient per play weight
+            else:
+                thresholds, shape = self._exponential_shape(u_arr, target, start, knots, slope)
+            basis = start_plays(u_arr, thresholds, start) @ shape
+            lower, upper = self._bounds(slope, knots.size - 1, basis.shape[1])
+            coefficients, offset, slopes = self._equation_error(basis, target, knots, lower, upper)
             if self.refine:
-                weights, offset, slopes = self._output_error(
-                    plays, target, knots, weights, offset, slopes, lower, upper
+                coefficients, offset, slopes = self._output_error(
+                    basis, target, knots, coefficients, offset, slopes, lower, upper
                 )
+            weights = shape @ coefficients
             pi = PIModel(
                 thresholds,
                 weights,
@@ -104,13 +120,39 @@ class MPIEstimator:
         self.fit_seconds_ = watch.seconds
         return self
 
-    def _bounds(self, slope: float, segments: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Bounds of ``(w, b, c)``: ``w_0`` floored, ``c`` (inverse-shaper slopes) in [r, 1/r]."""
+    def _bounds(self, slope: float, segments: int, columns: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Bounds of ``(w, b, c)``: the first play coefficient (``w_0`` or ``delta``) floored, the
+        rest non-negative, ``c`` (inverse-shaper slopes) in [r, 1/r] with ``c_0 = 1``."""
         ratio = self.min_slope_ratio
-        lower = np.r_[ratio * slope, np.zeros(self.n_operators - 1), -np.inf, np.full(segments, ratio)]
-        upper = np.r_[np.full(self.n_operators + 1, np.inf), np.full(segments, 1.0 / ratio)]
-        lower[self.n_operators + 1] = upper[self.n_operators + 1] = 1.0  # c_0 = 1 fixes the scale
+        lower = np.r_[ratio * slope, np.zeros(columns - 1), -np.inf, np.full(segments, ratio)]
+        upper = np.r_[np.full(columns + 1, np.inf), np.full(segments, 1.0 / ratio)]
+        lower[columns + 1] = upper[columns + 1] = 1.0  # c_0 = 1 fixes the scale
         return lower, upper
+
+    def _exponential_shape(
+        self,
+        u: NDArray[np.float64],
+        target: NDArray[np.float64],
+        start: MemoryStart,
+        knots: NDArray[np.float64],
+        slope: float,
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Thresholds and the unit-``delta`` weight column of the best ``(beta, mu)``."""
+        stride = max(1, len(target) // REFINE_ROWS)  # rows of the plays: an exact subproblem
+        h = segment_lengths(target[::stride], knots)
+        lower, upper = self._bounds(slope, knots.size - 1, 1)
+        keep = np.r_[0, 1, np.arange(3, lower.size)]  # c_0 is fixed, not a variable
+
+        def equation_error_cost(column: NDArray[np.float64]) -> float:
+            design = np.column_stack([column[::stride], np.ones(len(h)), -h[:, 1:]])
+            x = bounded_lsq(design, h[:, 0], lower[keep], upper[keep])
+            residual = design @ x - h[:, 0]
+            return float(residual @ residual)
+
+        beta, mu = exponential_search(u, start, self.n_operators, equation_error_cost)
+        thresholds, weights = exponential_pi_parameters(self.n_operators, beta, 1.0, mu)
+        self.beta_, self.mu_ = beta, mu
+        return thresholds, weights[:, None]
 
     def _equation_error(
         self,

@@ -10,6 +10,7 @@ are linear.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Literal
 
 import numpy as np
@@ -102,46 +103,53 @@ class PIEstimator:
     def _fit_exponential(
         self, u: NDArray[np.float64], target: NDArray[np.float64], start: MemoryStart
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
-        n = self.n_operators
-        if n < 2:
-            raise ModelError("the exponential parameterisation needs n_operators >= 2")
         floor = self.min_slope_ratio * float(np.ptp(target) / np.ptp(u))  # delta = w_0 >= floor
-        beta_max = float(np.ptp(u)) / 2.0 / (n - 1)  # largest threshold at half the input range
-        grid = beta_max * np.linspace(0.1, 1.0, 10)
-        profiles = [_beta_profile(u, target, start, n, beta, floor) for beta in grid]
-        best = int(np.argmin([p[0] for p in profiles]))
-        refined = minimize_scalar(
-            lambda beta: _beta_profile(u, target, start, n, beta, floor)[0],
-            bounds=(grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]),
-            method="bounded",
-            options={"xatol": 1e-4 * beta_max, "maxiter": 12},
-        )
-        beta = float(refined.x) if refined.fun < profiles[best][0] else float(grid[best])
-        _, mu, delta, c = _beta_profile(u, target, start, n, beta, floor)
-        thresholds, weights = exponential_pi_parameters(n, beta, delta, mu)
+        ones = np.ones(len(target))
+
+        def solve(column: NDArray[np.float64]) -> tuple[float, float, float]:
+            delta, c = bounded_lsq(np.column_stack([column, ones]), target, np.array([floor, -np.inf]))
+            residual = column * delta + c - target
+            return float(residual @ residual), float(delta), float(c)
+
+        beta, mu = exponential_search(u, start, self.n_operators, lambda column: solve(column)[0])
+        thresholds, shape = exponential_pi_parameters(self.n_operators, beta, 1.0, mu)
+        _, delta, c = solve(start_plays(u, thresholds, start) @ shape)
         self.beta_, self.mu_, self.delta_ = beta, mu, delta
-        return thresholds, weights, c
+        return thresholds, delta * shape, c
 
 
-def _beta_profile(
-    u: NDArray[np.float64], target: NDArray[np.float64], start: MemoryStart, n: int, beta: float, floor: float
-) -> tuple[float, float, float, float]:
-    """Best ``(cost, mu, delta, offset)`` of the exponential PI for a fixed ``beta``.
+def exponential_search(
+    u: NDArray[np.float64], start: MemoryStart, n: int, cost_of_column: Callable[[NDArray[np.float64]], float]
+) -> tuple[float, float]:
+    """``(beta, mu)`` of seed 000 eq 5 minimising ``cost_of_column(plays @ exp(-mu r))``.
 
-    The plays are computed once; ``mu`` is searched on a bracket, ``delta`` (>= floor) and the
-    offset are linear least squares for each ``mu``.
+    ``cost_of_column`` solves the linear rest of the problem (``delta``, offsets, ...) for the
+    summed play column with unit ``delta`` and returns its squared residual. For each ``beta``
+    the plays are computed once and ``mu`` is searched on a bracket; ``beta`` is taken on a grid
+    up to half the input range, then refined between the grid neighbours of the best point.
     """
-    thresholds = beta * np.arange(n)
-    plays = start_plays(u, thresholds, start)
-    ones = np.ones(len(plays))
+    if n < 2:
+        raise ModelError("the exponential parameterisation needs n_operators >= 2")
+    beta_max = float(np.ptp(u)) / 2.0 / (n - 1)  # largest threshold at half the input range
 
-    def linear_part(mu: float) -> tuple[float, float, float]:
-        column = plays @ np.exp(-mu * thresholds)
-        delta, c = bounded_lsq(np.column_stack([column, ones]), target, np.array([floor, -np.inf]))
-        residual = column * delta + c - target
-        return float(residual @ residual), float(delta), float(c)
+    def profile(beta: float) -> tuple[float, float]:
+        thresholds = beta * np.arange(n)
+        plays = start_plays(u, thresholds, start)
+        span = 8.0 / thresholds[-1]
+        search = minimize_scalar(
+            lambda mu: cost_of_column(plays @ np.exp(-mu * thresholds)), bounds=(-span / 4, span), method="bounded"
+        )
+        return float(search.fun), float(search.x)
 
-    mu_span = 8.0 / thresholds[-1]
-    search = minimize_scalar(lambda mu: linear_part(mu)[0], bounds=(-mu_span / 4, mu_span), method="bounded")
-    cost, delta, c = linear_part(float(search.x))
-    return cost, float(search.x), delta, c
+    grid = beta_max * np.linspace(0.1, 1.0, 10)
+    profiles = [profile(beta) for beta in grid]
+    best = int(np.argmin([cost for cost, _ in profiles]))
+    refined = minimize_scalar(
+        lambda beta: profile(beta)[0],
+        bounds=(grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]),
+        method="bounded",
+        options={"xatol": 1e-4 * beta_max, "maxiter": 12},
+    )
+    if refined.fun < profiles[best][0]:
+        return float(refined.x), profile(float(refined.x))[1]
+    return float(grid[best]), profiles[best][1]
