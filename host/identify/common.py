@@ -2,15 +2,17 @@
 
 from __future__ import annotations
 
+import abc
 import time
 from dataclasses import dataclass
+from typing import Self
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import lsq_linear
 
 from edge.errors import DataError, ModelError
-from edge.hysteresis.base import Branch, as_signal
+from edge.hysteresis.base import Branch, HysteresisModel, as_signal
 
 
 @dataclass(frozen=True)
@@ -84,6 +86,32 @@ def check_slope_ratio(ratio: float) -> float:
     if not 0.0 < ratio < 1.0:
         raise ModelError(f"min_slope_ratio must be between 0 and 1; got {ratio}")
     return float(ratio)
+
+
+class HysteresisEstimator(abc.ABC):
+    """Template for the estimators: ``fit`` validates, times, finds where the memory is known,
+    calls :meth:`_identify` and records the learned attributes.
+
+    Learned attributes: ``model_`` (the forward model, left in the state it ends the training
+    data in), ``train_prediction_`` (its output from ``start_index_`` on), ``start_index_`` and
+    ``start_branch_`` (see :class:`MemoryStart`), ``fit_seconds_``.
+    """
+
+    def fit(self, u: ArrayLike, y: ArrayLike) -> Self:
+        u_arr, y_arr = training_signals(u, y)
+        with Stopwatch() as watch:
+            start = memory_start(u_arr)
+            model = self._identify(u_arr, y_arr, start)
+            model.reset(float(u_arr[start.index]), start.branch)
+            self.train_prediction_ = model.simulate(u_arr[start.index :])
+        self.model_ = model
+        self.start_index_, self.start_branch_ = start.index, start.branch
+        self.fit_seconds_ = watch.seconds
+        return self
+
+    @abc.abstractmethod
+    def _identify(self, u: NDArray[np.float64], y: NDArray[np.float64], start: MemoryStart) -> HysteresisModel:
+        """The identified forward model; the fit uses samples from ``start.index`` on."""
 
 
 class Stopwatch:

@@ -13,19 +13,17 @@ the compensator is inactive on it).
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from edge.errors import ModelError
 from edge.hysteresis.dpi import DPIModel
 from edge.hysteresis.pi import branch_play_state, play_outputs
 from host.identify.common import (
+    HysteresisEstimator,
     MemoryStart,
-    Stopwatch,
     average_slope,
     bounded_lsq,
     check_slope_ratio,
-    memory_start,
-    training_signals,
 )
 
 
@@ -49,7 +47,7 @@ def branch_regressors(fills: NDArray[np.float64]) -> tuple[NDArray[np.float64], 
     return np.cumsum(np.maximum(change, 0.0), axis=0), np.cumsum(np.maximum(-change, 0.0), axis=0)
 
 
-class DPIEstimator:
+class DPIEstimator(HysteresisEstimator):
     """Identify a :class:`~edge.hysteresis.dpi.DPIModel`.
 
     As in seed 002, the pairs are identified from the branches without the compensator (one
@@ -76,30 +74,21 @@ class DPIEstimator:
         self.closure_weight = closure_weight
         self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
 
-    def fit(self, u: ArrayLike, y: ArrayLike) -> DPIEstimator:
-        u_arr, y_arr = training_signals(u, y)
+    def _identify(self, u: NDArray[np.float64], y: NDArray[np.float64], start: MemoryStart) -> DPIModel:
         n = self.n_operators
-        with Stopwatch() as watch:
-            start = memory_start(u_arr)
-            target = y_arr[start.index :]
-            x0, x1 = float(u_arr.min()), float(u_arr.max())
-            dx = (x1 - x0) / n
-            gained, lost = branch_regressors(digit_fills(u_arr, dx, n, start))
-            design = np.column_stack([gained, -lost, np.ones(len(target))])
-            closure = np.sqrt(self.closure_weight * len(target)) * np.r_[np.ones(n), -np.ones(n), 0.0]
-            floor = self.min_slope_ratio * average_slope(u_arr, y_arr) * dx
-            x = bounded_lsq(np.vstack([design, closure]), np.r_[target, 0.0], np.r_[np.full(2 * n, floor), -np.inf])
-            dye, dyc, y_start = x[:n], x[n : 2 * n], float(x[2 * n])
-            # y_start is the output in the start state; the model is translation invariant in y,
-            # so build it at y0 = 0, read its output in that state and shift by the difference
-            widths = np.full(n, dx)
-            probe = DPIModel(widths, dye, widths, dyc, x0=x0, y0=0.0, x1=x1, y1=float(dye.sum()))
-            probe.reset(float(u_arr[start.index]), start.branch)
-            y0 = y_start - probe.step(float(u_arr[start.index]))
-            model = DPIModel(widths, dye, widths, dyc, x0=x0, y0=y0, x1=x1, y1=y0 + float(dye.sum()))
-            model.reset(float(u_arr[start.index]), start.branch)
-            self.train_prediction_ = model.simulate(u_arr[start.index :])
-        self.model_ = model
-        self.start_index_, self.start_branch_ = start.index, start.branch
-        self.fit_seconds_ = watch.seconds
-        return self
+        target = y[start.index :]
+        x0, x1 = float(u.min()), float(u.max())
+        dx = (x1 - x0) / n
+        gained, lost = branch_regressors(digit_fills(u, dx, n, start))
+        design = np.column_stack([gained, -lost, np.ones(len(target))])
+        closure = np.sqrt(self.closure_weight * len(target)) * np.r_[np.ones(n), -np.ones(n), 0.0]
+        floor = self.min_slope_ratio * average_slope(u, y) * dx
+        x = bounded_lsq(np.vstack([design, closure]), np.r_[target, 0.0], np.r_[np.full(2 * n, floor), -np.inf])
+        dye, dyc, y_start = x[:n], x[n : 2 * n], float(x[2 * n])
+        # y_start is the output in the start state; the model is translation invariant in y,
+        # so build it at y0 = 0, read its output in that state and shift by the difference
+        widths = np.full(n, dx)
+        probe = DPIModel(widths, dye, widths, dyc, x0=x0, y0=0.0, x1=x1, y1=float(dye.sum()))
+        probe.reset(float(u[start.index]), start.branch)
+        y0 = y_start - probe.step(float(u[start.index]))
+        return DPIModel(widths, dye, widths, dyc, x0=x0, y0=y0, x1=x1, y1=y0 + float(dye.sum()))

@@ -15,7 +15,7 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
 from edge.errors import ModelError
@@ -23,13 +23,11 @@ from edge.hysteresis.mpi import MPIModel
 from edge.hysteresis.pi import PIModel, exponential_pi_parameters
 from edge.hysteresis.shaper import MonotonePiecewiseLinear
 from host.identify.common import (
+    HysteresisEstimator,
     MemoryStart,
-    Stopwatch,
     average_slope,
     bounded_lsq,
     check_slope_ratio,
-    memory_start,
-    training_signals,
 )
 from host.identify.pi import exponential_search, start_plays, uniform_thresholds
 
@@ -52,7 +50,7 @@ def inverse_shaper(knots: NDArray[np.float64], slopes: NDArray[np.float64]) -> M
     return MonotonePiecewiseLinear(knots[:-1], values, slopes[0], slopes[-1])
 
 
-class MPIEstimator:
+class MPIEstimator(HysteresisEstimator):
     """Identify an :class:`~edge.hysteresis.mpi.MPIModel`.
 
     Args:
@@ -86,39 +84,26 @@ class MPIEstimator:
         self.parameterisation = parameterisation
         self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
 
-    def fit(self, u: ArrayLike, y: ArrayLike) -> MPIEstimator:
-        u_arr, y_arr = training_signals(u, y)
-        with Stopwatch() as watch:
-            start = memory_start(u_arr)
-            target = y_arr[start.index :]
-            knots = np.linspace(target.min(), target.max(), self.n_dead_zones + 2)
-            slope = average_slope(u_arr, y_arr)
-            if self.parameterisation == "free":
-                thresholds = uniform_thresholds(u_arr, self.n_operators)
-                shape = np.eye(self.n_operators)  # one coefficient per play weight
-            else:
-                thresholds, shape = self._exponential_shape(u_arr, target, start, knots, slope)
-            basis = start_plays(u_arr, thresholds, start) @ shape
-            lower, upper = self._bounds(slope, knots.size - 1, basis.shape[1])
-            coefficients, offset, slopes = self._equation_error(basis, target, knots, lower, upper)
-            if self.refine:
-                coefficients, offset, slopes = self._output_error(
-                    basis, target, knots, coefficients, offset, slopes, lower, upper
-                )
-            weights = shape @ coefficients
-            pi = PIModel(
-                thresholds,
-                weights,
-                output_offset=offset,
-                actuator_range=(float(u_arr.min()), float(u_arr.max())),
+    def _identify(self, u: NDArray[np.float64], y: NDArray[np.float64], start: MemoryStart) -> MPIModel:
+        target = y[start.index :]
+        knots = np.linspace(target.min(), target.max(), self.n_dead_zones + 2)
+        slope = average_slope(u, y)
+        if self.parameterisation == "free":
+            thresholds = uniform_thresholds(u, self.n_operators)
+            shape = np.eye(self.n_operators)  # one coefficient per play weight
+        else:
+            thresholds, shape = self._exponential_shape(u, target, start, knots, slope)
+        basis = start_plays(u, thresholds, start) @ shape
+        lower, upper = self._bounds(slope, knots.size - 1, basis.shape[1])
+        coefficients, offset, slopes, _ = self._equation_error(basis, target, knots, lower, upper)
+        if self.refine:
+            coefficients, offset, slopes = self._output_error(
+                basis, target, knots, coefficients, offset, slopes, lower, upper
             )
-            model = MPIModel(pi, inverse_shaper(knots, slopes).inverse())
-            model.reset(float(u_arr[start.index]), start.branch)
-            self.train_prediction_ = model.simulate(u_arr[start.index :])
-        self.model_ = model
-        self.start_index_, self.start_branch_ = start.index, start.branch
-        self.fit_seconds_ = watch.seconds
-        return self
+        pi = PIModel(
+            thresholds, shape @ coefficients, output_offset=offset, actuator_range=(float(u.min()), float(u.max()))
+        )
+        return MPIModel(pi, inverse_shaper(knots, slopes).inverse())
 
     def _bounds(self, slope: float, segments: int, columns: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Bounds of ``(w, b, c)``: the first play coefficient (``w_0`` or ``delta``) floored, the
@@ -139,15 +124,10 @@ class MPIEstimator:
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Thresholds and the unit-``delta`` weight column of the best ``(beta, mu)``."""
         stride = max(1, len(target) // REFINE_ROWS)  # rows of the plays: an exact subproblem
-        h = segment_lengths(target[::stride], knots)
         lower, upper = self._bounds(slope, knots.size - 1, 1)
-        keep = np.r_[0, 1, np.arange(3, lower.size)]  # c_0 is fixed, not a variable
 
         def equation_error_cost(column: NDArray[np.float64]) -> float:
-            design = np.column_stack([column[::stride], np.ones(len(h)), -h[:, 1:]])
-            x = bounded_lsq(design, h[:, 0], lower[keep], upper[keep])
-            residual = design @ x - h[:, 0]
-            return float(residual @ residual)
+            return self._equation_error(column[::stride, None], target[::stride], knots, lower, upper)[3]
 
         beta, mu = exponential_search(u, start, self.n_operators, equation_error_cost)
         thresholds, weights = exponential_pi_parameters(self.n_operators, beta, 1.0, mu)
@@ -161,13 +141,15 @@ class MPIEstimator:
         knots: NDArray[np.float64],
         lower: NDArray[np.float64],
         upper: NDArray[np.float64],
-    ) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
+    ) -> tuple[NDArray[np.float64], float, NDArray[np.float64], float]:
+        """Step 1: play coefficients, offset, shaper slopes and the squared equation error."""
         n = plays.shape[1]
         h = segment_lengths(target, knots)
         design = np.column_stack([plays, np.ones(len(plays)), -h[:, 1:]])
         keep = np.r_[np.arange(n + 1), np.arange(n + 2, lower.size)]  # c_0 is not a variable here
         x = bounded_lsq(design, h[:, 0], lower[keep], upper[keep])
-        return x[:n], float(x[n]), np.r_[1.0, x[n + 1 :]]
+        residual = design @ x - h[:, 0]
+        return x[:n], float(x[n]), np.r_[1.0, x[n + 1 :]], float(residual @ residual)
 
     def _output_error(
         self,

@@ -14,19 +14,17 @@ from collections.abc import Callable
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 from scipy.optimize import minimize_scalar
 
 from edge.errors import ModelError
 from edge.hysteresis.pi import PIModel, branch_play_state, exponential_pi_parameters, play_outputs
 from host.identify.common import (
+    HysteresisEstimator,
     MemoryStart,
-    Stopwatch,
     average_slope,
     bounded_lsq,
     check_slope_ratio,
-    memory_start,
-    training_signals,
 )
 
 
@@ -41,7 +39,7 @@ def uniform_thresholds(u: NDArray[np.float64], n: int) -> NDArray[np.float64]:
     return np.arange(n) * (float(np.ptp(u)) / 2.0) / n
 
 
-class PIEstimator:
+class PIEstimator(HysteresisEstimator):
     """Identify a :class:`~edge.hysteresis.pi.PIModel`.
 
     Args:
@@ -66,29 +64,15 @@ class PIEstimator:
         self.parameterisation = parameterisation
         self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
 
-    def fit(self, u: ArrayLike, y: ArrayLike) -> PIEstimator:
-        u_arr, y_arr = training_signals(u, y)
-        with Stopwatch() as watch:
-            start = memory_start(u_arr)
-            target = y_arr[start.index :]
-            if self.parameterisation == "free":
-                thresholds = uniform_thresholds(u_arr, self.n_operators)
-                floor = self.min_slope_ratio * average_slope(u_arr, y_arr)
-                weights, offset = self._fit_free(start_plays(u_arr, thresholds, start), target, floor)
-            else:
-                thresholds, weights, offset = self._fit_exponential(u_arr, target, start)
-            model = PIModel(
-                thresholds,
-                weights,
-                output_offset=offset,
-                actuator_range=(float(u_arr.min()), float(u_arr.max())),
-            )
-            model.reset(float(u_arr[start.index]), start.branch)
-            self.train_prediction_ = model.simulate(u_arr[start.index :])
-        self.model_ = model
-        self.start_index_, self.start_branch_ = start.index, start.branch
-        self.fit_seconds_ = watch.seconds
-        return self
+    def _identify(self, u: NDArray[np.float64], y: NDArray[np.float64], start: MemoryStart) -> PIModel:
+        target = y[start.index :]
+        if self.parameterisation == "free":
+            thresholds = uniform_thresholds(u, self.n_operators)
+            floor = self.min_slope_ratio * average_slope(u, y)
+            weights, offset = self._fit_free(start_plays(u, thresholds, start), target, floor)
+        else:
+            thresholds, weights, offset = self._fit_exponential(u, target, start)
+        return PIModel(thresholds, weights, output_offset=offset, actuator_range=(float(u.min()), float(u.max())))
 
     @staticmethod
     def _fit_free(

@@ -17,19 +17,17 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 from scipy.linalg import cho_factor, solve_triangular
 
 from edge.errors import DataError, ModelError
 from edge.hysteresis.preisach import PreisachModel, everett_from_masses, masses_from_everett
 from host.identify.common import (
+    HysteresisEstimator,
     MemoryStart,
-    Stopwatch,
     average_slope,
     bounded_lsq,
     check_slope_ratio,
-    memory_start,
-    training_signals,
 )
 
 
@@ -166,7 +164,7 @@ def forc_everett(u: NDArray[np.float64], y: NDArray[np.float64], grid: EverettGr
     return everett
 
 
-class PreisachEstimator:
+class PreisachEstimator(HysteresisEstimator):
     """Identify a :class:`~edge.hysteresis.preisach.PreisachModel`.
 
     Args:
@@ -195,33 +193,21 @@ class PreisachEstimator:
         self.capacity = capacity
         self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
 
-    def fit(self, u: ArrayLike, y: ArrayLike) -> PreisachEstimator:
-        u_arr, y_arr = training_signals(u, y)
-        with Stopwatch() as watch:
-            start = memory_start(u_arr)
-            target = y_arr[start.index :]
-            grid = EverettGrid(float(u_arr.min()), float(u_arr.max()), self.n_levels)
-            floor = self.min_slope_ratio * average_slope(u_arr, y_arr) * grid.h
-            if self.method == "lsq":
-                everett, y_min = self._least_squares(u_arr, target, grid, start, floor)
-            else:
-                masses = np.maximum(masses_from_everett(forc_everett(u_arr, y_arr, grid)), 0.0)
-                for p in range(1, grid.n + 1):
-                    masses[p, p - 1] = max(masses[p, p - 1], floor)
-                everett, y_min = everett_from_masses(masses), 0.0
-            model = PreisachModel((grid.lo, grid.hi), everett, y_min, capacity=self.capacity)
-            if self.method == "forc":  # the output level: mean residual of the shape
-                model.reset(float(u_arr[start.index]), start.branch)
-                shape = model.simulate(u_arr[start.index :])
-                model = PreisachModel(
-                    (grid.lo, grid.hi), everett, float(np.mean(target - shape)), capacity=self.capacity
-                )
-            model.reset(float(u_arr[start.index]), start.branch)
-            self.train_prediction_ = model.simulate(u_arr[start.index :])
-        self.model_ = model
-        self.start_index_, self.start_branch_ = start.index, start.branch
-        self.fit_seconds_ = watch.seconds
-        return self
+    def _identify(self, u: NDArray[np.float64], y: NDArray[np.float64], start: MemoryStart) -> PreisachModel:
+        target = y[start.index :]
+        grid = EverettGrid(float(u.min()), float(u.max()), self.n_levels)
+        floor = self.min_slope_ratio * average_slope(u, y) * grid.h
+        if self.method == "lsq":
+            everett, y_min = self._least_squares(u, target, grid, start, floor)
+            return PreisachModel((grid.lo, grid.hi), everett, y_min, capacity=self.capacity)
+        masses = np.maximum(masses_from_everett(forc_everett(u, y, grid)), 0.0)
+        for p in range(1, grid.n + 1):
+            masses[p, p - 1] = max(masses[p, p - 1], floor)
+        everett = everett_from_masses(masses)
+        shape = PreisachModel((grid.lo, grid.hi), everett, 0.0, capacity=self.capacity)
+        shape.reset(float(u[start.index]), start.branch)
+        y_min = float(np.mean(target - shape.simulate(u[start.index :])))  # the output level
+        return PreisachModel((grid.lo, grid.hi), everett, y_min, capacity=self.capacity)
 
     def _least_squares(
         self,
