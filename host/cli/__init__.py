@@ -29,6 +29,12 @@ def _demo(args: argparse.Namespace) -> int:
     return run(args)
 
 
+def _hil_record(args: argparse.Namespace) -> int:
+    from host.cli.hil import run_record
+
+    return run_record(args)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pmactl",
@@ -70,6 +76,22 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     fit.add_argument("--save", metavar="DIR", help="write the lookup-table bundle (model + inverse) here")
     fit.set_defaults(run=_fit)
+
+    hil = sub.add_parser("hil", help="the emulated rig: recordings with hidden effects")
+    hil_sub = hil.add_subparsers(dest="hil_command", required=True, metavar="HIL_COMMAND")
+    rec = hil_sub.add_parser("record", help="run a test protocol on the emulated rig and write a measured-data CSV")
+    rec.add_argument("--scenario", required=True, choices=["triangles", "sines", "ramp", "holds", "forc", "mixed"])
+    rec.add_argument("--seed", type=int, default=0, help="random seed (protocol details and effect parameters)")
+    rec.add_argument("--duration", type=float, default=120.0, metavar="S", help="seconds of recording (default 120)")
+    rec.add_argument(
+        "--effect",
+        default="none",
+        choices=["none", "rate_dependence", "creep", "transport_delay", "load_dependence", "temperature_drift"],
+        help="hidden effect, parameters drawn from physical ranges (default none)",
+    )
+    rec.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="sample rate, divides 1000 (default 100)")
+    rec.add_argument("--out", required=True, metavar="CSV", help="output CSV; the truth goes to <name>.truth.json")
+    rec.set_defaults(run=_hil_record)
     return parser
 
 

@@ -1,0 +1,104 @@
+"""Test protocols after the seed papers, as pressure-command sequences [bar] at the plant rate.
+
+Each scenario is ``f(duration_s, dt_s, rng) -> commands``; the random generator varies phases
+and amplitudes a little so that different seeds give different (but comparable) recordings.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+Scenario = Callable[[float, float, np.random.Generator], np.ndarray]
+
+
+def _time(duration_s: float, dt_s: float) -> np.ndarray:
+    return np.arange(int(round(duration_s / dt_s))) * dt_s
+
+
+def triangles(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Seed 000: triangles 0 -> 1, 2, 3, 4 bar at 0.05 Hz (20 s each), repeated to fill."""
+    t = _time(duration_s, dt_s)
+    period = 20.0
+    cycle = (t // period).astype(int)
+    peak = 1.0 + (cycle % 4)
+    return peak * (1.0 - np.abs(2.0 * ((t % period) / period) - 1.0))
+
+
+def sines(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Seed 001: sinusoids at several rates and amplitudes around 2 bar.
+
+    Segments of whole cycles, each starting and ending at the offset, so the command never
+    steps between segments (a step would test the valve, not the hysteresis).
+    """
+    settings = [(0.05, 1.6), (0.2, 1.2), (0.5, 1.0), (1.0, 0.8), (0.1, 1.8), (0.35, 1.4)]
+    segment_s = duration_s / len(settings)
+    pieces = []
+    for index in rng.permutation(len(settings)):
+        frequency, amplitude = settings[index]
+        cycles = max(1, int(round(segment_s * frequency)))
+        local = np.arange(int(round(cycles / frequency / dt_s))) * dt_s
+        pieces.append(2.0 + amplitude * np.sin(2 * np.pi * frequency * local))
+    sequence = np.concatenate(pieces)
+    steps = int(round(duration_s / dt_s))
+    return np.tile(sequence, int(np.ceil(steps / sequence.size)))[:steps]
+
+
+def amplitude_ramp(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Seed 002 eq 33: a sine whose amplitude ramps up, holds for a tenth, ramps down."""
+    t = _time(duration_s, dt_s)
+    frequency = 0.25
+    x = t / duration_s
+    envelope = np.where(x < 0.45, x / 0.45, np.where(x < 0.55, 1.0, (1.0 - x) / 0.45))
+    return 2.0 + 1.8 * envelope * np.sin(2 * np.pi * frequency * t)
+
+
+def holds(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Constant-pressure holds of 15-25 s at random levels, reached by 2 s ramps."""
+    t = _time(duration_s, dt_s)
+    out = np.empty_like(t)
+    level, start = 0.0, 0.0
+    while start < duration_s:
+        target = float(rng.uniform(0.5, 3.8))
+        hold = float(rng.uniform(15.0, 25.0))
+        mask = (t >= start) & (t < start + 2.0 + hold)
+        ramp = np.clip((t[mask] - start) / 2.0, 0.0, 1.0)
+        out[mask] = level + (target - level) * ramp
+        level, start = target, start + 2.0 + hold
+    return out
+
+
+def forc(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Seed 003: first-order reversal curves, 0 -> rising maxima -> 0, at 0.4 bar/s."""
+    rate = 0.4
+    peaks = np.linspace(0.4, 4.0, 10)
+    pieces = [np.concatenate([np.arange(0.0, p, rate * dt_s), np.arange(p, 0.0, -rate * dt_s)]) for p in peaks]
+    sweep = np.concatenate(pieces)
+    reps = int(np.ceil(duration_s / dt_s / sweep.size))
+    return np.tile(sweep, reps)[: int(round(duration_s / dt_s))]
+
+
+def mixed(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """All of the above in equal parts, joined by 2 s ramps."""
+    parts = [triangles, sines, amplitude_ramp, holds, forc]
+    ramp_s = 2.0
+    share = max(1.0, (duration_s - ramp_s * (len(parts) - 1)) / len(parts))
+    pieces: list[np.ndarray] = []
+    for part in parts:
+        piece = part(share, dt_s, rng)
+        if pieces:
+            steps = int(round(ramp_s / dt_s))
+            pieces.append(np.linspace(pieces[-1][-1], piece[0], steps, endpoint=False))
+        pieces.append(piece)
+    return np.concatenate(pieces)[: int(round(duration_s / dt_s))]
+
+
+SCENARIOS: dict[str, Scenario] = {
+    "triangles": triangles,
+    "sines": sines,
+    "ramp": amplitude_ramp,
+    "holds": holds,
+    "forc": forc,
+    "mixed": mixed,
+}

@@ -1,0 +1,23 @@
+"""``pmactl hil record``: a recording from the emulated rig with an optional hidden effect."""
+
+from __future__ import annotations
+
+import argparse
+
+from edge.errors import DataError
+from hil.record import record, truth_path, write_recording
+
+
+def run_record(args: argparse.Namespace) -> int:
+    if not 1.0 <= args.duration <= 24 * 3600:
+        raise DataError(f"--duration {args.duration} s is outside 1 s .. 24 h")
+    try:
+        recording = record(args.scenario, args.seed, args.duration, args.effect, args.rate)
+    except ValueError as exc:
+        raise DataError(str(exc)) from exc
+    path = write_recording(recording, args.out)
+    print(
+        f"wrote {path} ({recording.t.size} samples at {args.rate:g} Hz, scenario {args.scenario}, "
+        f"effect {args.effect}) and {truth_path(path).name}"
+    )
+    return 0
