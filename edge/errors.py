@@ -21,3 +21,7 @@ class ModelError(PmactlError, ValueError):
 
 class BundleError(PmactlError, ValueError):
     """A model bundle that is missing, corrupt or of the wrong kind."""
+
+
+class BusError(PmactlError, OSError):
+    """A transfer on a hardware bus failed (NACK, I/O error, timeout, corrupt frame)."""

@@ -13,6 +13,8 @@ import warnings
 from collections.abc import Callable, Sequence
 
 from edge.errors import PmactlError
+from hil.effects import EFFECTS
+from hil.scenarios import SCENARIOS
 
 HOST_ONLY_MODULES = {"scipy", "matplotlib"}
 
@@ -33,6 +35,12 @@ def _hil_record(args: argparse.Namespace) -> int:
     from host.cli.hil import run_record
 
     return run_record(args)
+
+
+def _hil_serve(args: argparse.Namespace) -> int:
+    from hil.serve import serve
+
+    return serve(args.effect, args.seed, args.rate, args.duration)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -80,18 +88,24 @@ def build_parser() -> argparse.ArgumentParser:
     hil = sub.add_parser("hil", help="the emulated rig: recordings with hidden effects")
     hil_sub = hil.add_subparsers(dest="hil_command", required=True, metavar="HIL_COMMAND")
     rec = hil_sub.add_parser("record", help="run a test protocol on the emulated rig and write a measured-data CSV")
-    rec.add_argument("--scenario", required=True, choices=["triangles", "sines", "ramp", "holds", "forc", "mixed"])
+    rec.add_argument("--scenario", required=True, choices=list(SCENARIOS))
     rec.add_argument("--seed", type=int, default=0, help="random seed (protocol details and effect parameters)")
     rec.add_argument("--duration", type=float, default=120.0, metavar="S", help="seconds of recording (default 120)")
     rec.add_argument(
         "--effect",
         default="none",
-        choices=["none", "rate_dependence", "creep", "transport_delay", "load_dependence", "temperature_drift"],
+        choices=list(EFFECTS),
         help="hidden effect, parameters drawn from physical ranges (default none)",
     )
     rec.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="sample rate, divides 1000 (default 100)")
     rec.add_argument("--out", required=True, metavar="CSV", help="output CSV; the truth goes to <name>.truth.json")
     rec.set_defaults(run=_hil_record)
+    srv = hil_sub.add_parser("serve", help="real-time mode: serve the emulated rig's serial DAQ on a pseudo-terminal")
+    srv.add_argument("--effect", default="none", choices=list(EFFECTS))
+    srv.add_argument("--seed", type=int, default=0)
+    srv.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sample frames per second")
+    srv.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: until SIGTERM)")
+    srv.set_defaults(run=_hil_serve)
     return parser
 
 

@@ -1,0 +1,34 @@
+"""Emulated GPIO lines implementing :class:`edge.hal.gpio.GpioLines`."""
+
+from __future__ import annotations
+
+import errno
+
+from edge.errors import BusError
+
+
+class EmulatedGpio:
+    """Named lines: ``outputs`` are driven by the edge, the rest are inputs the rig drives."""
+
+    def __init__(self, lines: dict[str, bool], outputs: set[str]) -> None:
+        self._values = dict(lines)
+        self._outputs = set(outputs)
+
+    def get(self, name: str) -> bool:
+        if name not in self._values:
+            raise BusError(errno.ENOENT, f"GPIO line {name!r} not configured; lines: {sorted(self._values)}")
+        return self._values[name]
+
+    def set(self, name: str, value: bool) -> None:
+        if name not in self._outputs:
+            raise BusError(errno.EPERM, f"GPIO line {name!r} is not an output")
+        self._values[name] = bool(value)
+
+    def drive_input(self, name: str, value: bool) -> None:
+        """The rig side: set an input line (e.g. press the e-stop)."""
+        if name in self._outputs or name not in self._values:
+            raise ValueError(f"{name!r} is not an input line")
+        self._values[name] = bool(value)
+
+    def close(self) -> None:
+        """Nothing to release."""

@@ -1,0 +1,157 @@
+"""The emulated rig: plant physics wired to chip emulators, GPIO lines and faults.
+
+Wiring (the defaults of ``docs/examples/hil-rig.toml`` in the edge issue):
+
+* ADS1115 (or ADS1015) at 0x48. AIN0: pressure transducer, 0.5-4.5 V for 0-10 bar. AIN1:
+  displacement potentiometer, 0-3.3 V for -10..150 mm of contraction.
+* MCP4725 at 0x60 drives the proportional valve: 0-5 V for 0-10 bar, limited by the supply.
+* GPIO: ``valve_enable`` (edge output; off vents the muscle), ``estop`` (edge input).
+
+The physics is brought up to date lazily: before every bus transfer and analog read the plant
+is integrated from its last time to the clock's now at its fixed step, with the valve command
+that held over that interval. With a :class:`~hil.clock.SimClock` that is lockstep (no sleeping,
+deterministic); with the wall clock it is real time.
+
+Faults: sensors stuck (voltage frozen), saturated (driven past full scale), disconnected (pulled
+to the supply rail); valve stuck (ignores new commands); supply pressure drop; plus the bus's
+wire faults (:class:`~hil.devices.bus.WireFaults`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from edge.hal.clock import Clock
+from hil.clock import SimClock
+from hil.devices.ads1x15 import ADS1x15Emulator
+from hil.devices.bus import EmulatedI2CBus
+from hil.devices.gpio import EmulatedGpio
+from hil.devices.mcp4725 import MCP4725Emulator
+from hil.plant import Outputs, PlantParams, initial_state, output, update
+
+ADC_ADDRESS = 0x48
+DAC_ADDRESS = 0x60
+PRESSURE_CHANNEL = 0
+DISPLACEMENT_CHANNEL = 1
+ADC_VDD = 3.3
+
+
+def pressure_volts(pressure_bar: float) -> float:
+    """Transducer: 0.5 V at 0 bar, 4.5 V at 10 bar."""
+    return 0.5 + 0.4 * pressure_bar
+
+
+def displacement_volts(contraction_mm: float) -> float:
+    """Potentiometer: 0 V at -10 mm, 3.3 V at 150 mm."""
+    return ADC_VDD * (contraction_mm + 10.0) / 160.0
+
+
+def valve_command_bar(dac_volts: float) -> float:
+    """Proportional valve: 2 bar per volt of command."""
+    return 2.0 * dac_volts
+
+
+@dataclass
+class RigFaults:
+    """Faults at the sensors and the valve. Sensor modes: None, stuck, saturated, disconnected."""
+
+    sensors: dict[int, str | None] = field(default_factory=lambda: {PRESSURE_CHANNEL: None, DISPLACEMENT_CHANNEL: None})
+    stuck_volts: dict[int, float] = field(default_factory=dict)
+    valve_stuck_bar: float | None = None
+
+
+class HilRig:
+    """The emulated rig (see module docstring).
+
+    Args:
+        params: plant parameters (effects already applied).
+        clock: defaults to a new :class:`SimClock` (lockstep).
+        seed: sensor noise.
+        adc_variant: ``ADS1115`` or ``ADS1015``.
+    """
+
+    def __init__(
+        self,
+        params: PlantParams | None = None,
+        clock: Clock | None = None,
+        seed: int = 0,
+        adc_variant: str = "ADS1115",
+    ) -> None:
+        self.params = params or PlantParams()
+        self.clock = clock or SimClock()
+        self._rng = np.random.default_rng(seed)
+        self.state = initial_state(self.params)
+        self._plant_time = self.clock.now()
+        self.faults = RigFaults()
+        advance = self.clock.advance if isinstance(self.clock, SimClock) else None
+        self.bus = EmulatedI2CBus(advance=advance, before_transfer=self.sync)
+        self.adc = ADS1x15Emulator(self.clock.now, self._analog, adc_variant, vdd=ADC_VDD)
+        self.dac = MCP4725Emulator(self.clock.now)
+        self.bus.attach(ADC_ADDRESS, self.adc)
+        self.bus.attach(DAC_ADDRESS, self.dac)
+        self.gpio = EmulatedGpio({"valve_enable": False, "estop": False}, outputs={"valve_enable"})
+        self.steps = 0
+
+    @property
+    def command_bar(self) -> float:
+        """What the valve is asked for now [bar]."""
+        if self.faults.valve_stuck_bar is not None:
+            return self.faults.valve_stuck_bar
+        if not self.gpio.get("valve_enable"):
+            return 0.0  # vented
+        return valve_command_bar(self.dac.output_volts)
+
+    def sync(self) -> None:
+        """Integrate the plant up to the clock's now."""
+        dt = self.params.dt_s
+        now = self.clock.now()
+        command = self.command_bar
+        while self._plant_time + dt <= now + 1e-12:
+            self.state = update(self._plant_time, self.state, command, self.params)
+            self._plant_time += dt
+            self.steps += 1
+
+    def outputs(self) -> Outputs:
+        """True (noise-free) plant outputs now."""
+        self.sync()
+        return output(self._plant_time, self.state, self.params)
+
+    def _analog(self, channel: int) -> float:
+        mode = self.faults.sensors.get(channel)
+        if mode == "stuck":
+            return self.faults.stuck_volts.setdefault(channel, self._sensor_volts(channel))
+        if mode == "saturated":
+            return ADC_VDD + 0.3
+        if mode == "disconnected":
+            return ADC_VDD  # pulled up to the rail
+        return self._sensor_volts(channel)
+
+    def _sensor_volts(self, channel: int) -> float:
+        out = self.outputs()
+        if channel == PRESSURE_CHANNEL:
+            return pressure_volts(out.pressure_bar + self._rng.normal(0.0, 0.004))
+        if channel == DISPLACEMENT_CHANNEL:
+            return displacement_volts(out.contraction_mm + self._rng.normal(0.0, 0.03))
+        return 0.0
+
+    # fault switches -------------------------------------------------------------------------
+    def fail_sensor(self, channel: int, mode: str | None) -> None:
+        """``mode``: None (healthy), ``stuck``, ``saturated``, ``disconnected``."""
+        if mode not in (None, "stuck", "saturated", "disconnected"):
+            raise ValueError(f"sensor fault {mode!r} unknown")
+        self.faults.sensors[channel] = mode
+        self.faults.stuck_volts.pop(channel, None)
+
+    def stick_valve(self, stuck: bool = True) -> None:
+        """The valve keeps its present command until released."""
+        self.sync()
+        self.faults.valve_stuck_bar = self.command_bar if stuck else None
+
+    def drop_supply(self, supply_bar: float) -> None:
+        self.sync()
+        self.params = replace(self.params, supply_bar=supply_bar)
+
+    def press_estop(self, pressed: bool = True) -> None:
+        self.gpio.drive_input("estop", pressed)
