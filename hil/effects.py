@@ -1,8 +1,10 @@
 """The effects the emulator can hide in a recording, each with physically sensible ranges.
 
 ``apply_effect(name, params, rng, duration_s)`` returns the plant parameters with the effect
-switched on (parameters drawn uniformly from the ranges below) and its truth record. With
-``none`` the plant is the default rig: the diagnosis must then find nothing.
+switched on and its truth record. Parameters are drawn uniformly from :data:`EFFECT_RANGES`
+when a random generator is given (what ``pmactl hil record`` does, from its seed) and are the
+middle of each range otherwise. With ``none`` the plant is the default rig: a diagnosis must
+then find nothing.
 """
 
 from __future__ import annotations
@@ -17,37 +19,57 @@ EFFECTS = ("none", "rate_dependence", "creep", "transport_delay", "load_dependen
 
 SEED_000_LOADS_KG = (0.0, 1.5, 3.5, 5.5, 7.5)
 
+EFFECT_RANGES: dict[str, dict[str, tuple[float, float]]] = {
+    # viscous braid friction: loops widen with input rate (seed 001)
+    "rate_dependence": {"damping_n_s_per_m": (1500.0, 5000.0)},
+    # viscoelastic relaxation under a constant load (seed 003)
+    "creep": {"creep_fraction": (0.03, 0.10), "creep_time_constant_s": (5.0, 30.0)},
+    # pneumatic line dead time (seed 004 measured 0.3 s)
+    "transport_delay": {"dead_time_s": (0.05, 0.30)},
+    # the hanging mass steps through seed 000's loads (Figs 8-9); order drawn, not ranged
+    "load_dependence": {},
+    # the rig warms up: bladder and braid soften
+    "temperature_drift": {
+        "temperature_rise_k": (8.0, 25.0),
+        "elastic_softening_per_k": (0.003, 0.010),
+        "friction_softening_per_k": (0.005, 0.02),
+    },
+}
+
+
+def _draw(name: str, rng: np.random.Generator | None) -> dict[str, float]:
+    ranges = EFFECT_RANGES.get(name, {})
+    if rng is None:
+        return {key: (lo + hi) / 2.0 for key, (lo, hi) in ranges.items()}
+    return {key: float(rng.uniform(lo, hi)) for key, (lo, hi) in ranges.items()}
+
 
 def apply_effect(
-    name: str, params: PlantParams, rng: np.random.Generator, duration_s: float
+    name: str, params: PlantParams, rng: np.random.Generator | None, duration_s: float
 ) -> tuple[PlantParams, dict[str, object]]:
     """``params`` with effect ``name`` switched on, and ``{"effect": name, "parameters": {...}}``."""
     if name not in EFFECTS:
         raise ValueError(f"effect {name!r} unknown; choose one of {', '.join(EFFECTS)}")
-    truth: dict[str, float | list[float]]
-    if name == "none":
-        truth = {}
-    elif name == "rate_dependence":  # viscous braid friction: loops widen with input rate (seed 001)
-        damping = float(rng.uniform(1500.0, 5000.0))
-        params, truth = replace(params, damping_n_s_per_m=damping), {"damping_n_s_per_m": damping}
-    elif name == "creep":  # viscoelastic relaxation under a constant load (seed 003)
-        fraction, tau = float(rng.uniform(0.03, 0.10)), float(rng.uniform(5.0, 30.0))
-        params = replace(params, creep_fraction=fraction, creep_time_constant_s=tau)
-        truth = {"creep_fraction": fraction, "creep_time_constant_s": tau}
-    elif name == "transport_delay":  # pneumatic line dead time (seed 004: 0.3 s)
-        delay = float(rng.uniform(0.05, 0.30))
-        params, truth = replace(params, dead_time_s=delay), {"dead_time_s": delay}
-    elif name == "load_dependence":  # the hanging mass changes (seed 000 Figs 8-9)
-        loads = [float(v) for v in rng.permutation(SEED_000_LOADS_KG)]
+    values = _draw(name, rng)
+    truth: dict[str, object] = dict(values)
+    if name == "rate_dependence":
+        params = replace(params, damping_n_s_per_m=values["damping_n_s_per_m"])
+    elif name == "creep":
+        params = replace(params, **values)
+    elif name == "transport_delay":
+        params = replace(params, dead_time_s=values["dead_time_s"])
+    elif name == "load_dependence":
+        loads = [float(v) for v in (rng.permutation(SEED_000_LOADS_KG) if rng is not None else SEED_000_LOADS_KG)]
         times = [i * duration_s / len(loads) for i in range(len(loads))]
         params = replace(params, load=Schedule(tuple(times), tuple(loads)))
         truth = {"load_kg": loads, "switch_times_s": times}
-    else:  # temperature_drift: the bladder and braid soften as the rig warms up
-        rise = float(rng.uniform(8.0, 25.0))
-        elastic, friction = float(rng.uniform(0.003, 0.010)), float(rng.uniform(0.005, 0.02))
+    elif name == "temperature_drift":
+        rise = values["temperature_rise_k"]
         profile = TemperatureProfile(params.reference_temperature_c, rise, 0.2 * rise, duration_s, duration_s / 2)
         params = replace(
-            params, temperature=profile, elastic_softening_per_k=elastic, friction_softening_per_k=friction
+            params,
+            temperature=profile,
+            elastic_softening_per_k=values["elastic_softening_per_k"],
+            friction_softening_per_k=values["friction_softening_per_k"],
         )
-        truth = {"temperature_rise_k": rise, "elastic_softening_per_k": elastic, "friction_softening_per_k": friction}
     return params, {"effect": name, "parameters": truth}

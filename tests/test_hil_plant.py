@@ -133,3 +133,12 @@ def test_cli_record(tmp_path, capsys):
     assert main(["hil", "record", "--scenario", "forc", "--seed", "2", "--duration", "10", "--out", str(out)]) == 0
     assert "1000 samples" in capsys.readouterr().out
     assert truth_path(out).exists()
+
+
+@pytest.mark.parametrize("effect", [e for e in EFFECTS if e not in ("none", "load_dependence")])
+def test_defaults_are_the_middle_of_each_range(effect):
+    from hil.effects import EFFECT_RANGES
+
+    _, truth = apply_effect(effect, BASE, None, 100.0)
+    for key, (lo, hi) in EFFECT_RANGES[effect].items():
+        assert truth["parameters"][key] == pytest.approx((lo + hi) / 2)
