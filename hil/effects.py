@@ -20,8 +20,9 @@ EFFECTS = ("none", "rate_dependence", "creep", "transport_delay", "load_dependen
 SEED_000_LOADS_KG = (0.0, 1.5, 3.5, 5.5, 7.5)
 
 EFFECT_RANGES: dict[str, dict[str, tuple[float, float]]] = {
-    # viscous braid friction: loops widen with input rate (seed 001)
-    "rate_dependence": {"damping_n_s_per_m": (1500.0, 5000.0)},
+    # velocity-strengthening braid friction: loops widen with input rate (seed 001); friction at
+    # least 2.5x at 0.1 m/s: weaker widening is, to first order, the same as a short dead time
+    "rate_dependence": {"rate_friction_s_per_m": (15.0, 40.0)},
     # viscoelastic relaxation under a constant load (seed 003)
     "creep": {"creep_fraction": (0.03, 0.10), "creep_time_constant_s": (5.0, 30.0)},
     # pneumatic line dead time (seed 004 measured 0.3 s)
@@ -53,7 +54,7 @@ def apply_effect(
     values = _draw(name, rng)
     truth: dict[str, object] = dict(values)
     if name == "rate_dependence":
-        params = replace(params, damping_n_s_per_m=values["damping_n_s_per_m"])
+        params = replace(params, rate_friction_s_per_m=values["rate_friction_s_per_m"])
     elif name == "creep":
         params = replace(params, **values)
     elif name == "transport_delay":

@@ -10,7 +10,9 @@ balance with the Tondu-Lopez static muscle force (seed 004 eq 1)::
 solved implicitly for the contraction ``x`` at every step (stiff slip elements stay stable).
 The proportional valve turns the pressure command into chamber pressure as a first-order lag
 with a flow-rate limit and an optional dead time. Creep is a slow viscoelastic relaxation of
-the contraction; temperature softens the bladder (``b`` falls) and the braid friction.
+the contraction; temperature softens the bladder (``b`` falls) and the braid friction. Braid
+friction can grow with sliding speed (fibre friction is velocity strengthening), which widens
+the loops with the input rate without adding a lag at reversals: rate-dependent hysteresis.
 
 Pure functions in python-control's shape: ``update(t, x, u, params) -> x`` advances one fixed
 step ``params.dt_s``; ``output(t, x, params) -> Outputs`` reads the noise-free sensor
@@ -80,7 +82,8 @@ class PlantParams:
     spring_n_per_m: float = 6700.0
     slip_stiffness_n_per_m: tuple[float, ...] = (40e3, 25e3, 15e3, 10e3, 6e3, 4e3)
     slip_break_force_n: tuple[float, ...] = (4.0, 5.0, 6.0, 6.0, 5.0, 4.0)
-    damping_n_s_per_m: float = 100.0  # viscous braid friction (rate dependence when large)
+    damping_n_s_per_m: float = 100.0  # viscous damping of the load motion
+    rate_friction_s_per_m: float = 0.0  # braid friction grows by this factor per m/s of sliding speed
     creep_fraction: float = 0.0  # relaxed share of the contraction under a constant load
     creep_time_constant_s: float = 20.0
     temperature: TemperatureProfile = field(default_factory=TemperatureProfile)
@@ -95,13 +98,14 @@ class PlantParams:
 
 class PlantState(NamedTuple):
     """State of the rig: pressure [bar], contraction [m], creep [m], slip stretches [m],
-    commands still in the pneumatic line (oldest first) [bar]."""
+    commands still in the pneumatic line (oldest first) [bar], contraction speed [m/s]."""
 
     pressure_bar: float
     contraction_m: float
     creep_m: float
     slips_m: tuple[float, ...]
     line_bar: tuple[float, ...]
+    speed_m_s: float = 0.0
 
 
 class Outputs(NamedTuple):
@@ -133,11 +137,17 @@ def initial_state(params: PlantParams, pressure_bar: float = 0.0) -> PlantState:
     return state._replace(contraction_m=position, slips_m=stretched)
 
 
+def _friction_scale(params: PlantParams, t: float, speed_m_s: float) -> float:
+    """Braid friction relative to nominal: softened by warmth, raised by sliding speed."""
+    warmth = params.temperature.at(t) - params.reference_temperature_c
+    return (1.0 - params.friction_softening_per_k * warmth) * (1.0 + params.rate_friction_s_per_m * abs(speed_m_s))
+
+
 def _balance(params: PlantParams, t: float, x: PlantState, pressure_bar: float, damping: float) -> float:
     """Contraction [m] where the forces balance at ``pressure_bar`` (safeguarded Newton)."""
     temperature = params.temperature.at(t)
     weight = params.load.at(t) * GRAVITY
-    soften = 1.0 - params.friction_softening_per_k * (temperature - params.reference_temperature_c)
+    soften = _friction_scale(params, t, x.speed_m_s)
     stiffness = params.slip_stiffness_n_per_m
     limits = [soften * f / k for f, k in zip(params.slip_break_force_n, stiffness)]
     x_prev, slips = x.contraction_m, x.slips_m
@@ -194,7 +204,7 @@ def update(t: float, x: PlantState, u: float, params: PlantParams) -> PlantState
     t_next = t + dt
     contraction = _balance(params, t_next, x, pressure, params.damping_n_s_per_m)
     move = contraction - x.contraction_m
-    soften = 1.0 - params.friction_softening_per_k * (params.temperature.at(t_next) - params.reference_temperature_c)
+    soften = _friction_scale(params, t_next, x.speed_m_s)
     slips = tuple(
         min(max(s + move, -soften * f / k), soften * f / k)
         for s, f, k in zip(x.slips_m, params.slip_break_force_n, params.slip_stiffness_n_per_m)
@@ -202,7 +212,7 @@ def update(t: float, x: PlantState, u: float, params: PlantParams) -> PlantState
     creep = x.creep_m
     if params.creep_fraction:
         creep += dt * (params.creep_fraction * contraction - creep) / params.creep_time_constant_s
-    return PlantState(pressure, contraction, creep, slips, line)
+    return PlantState(pressure, contraction, creep, slips, line, move / dt)
 
 
 def output(t: float, x: PlantState, params: PlantParams) -> Outputs:

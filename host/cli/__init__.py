@@ -31,6 +31,12 @@ def _demo(args: argparse.Namespace) -> int:
     return run(args)
 
 
+def _diagnose(args: argparse.Namespace) -> int:
+    from host.cli.diagnose import run
+
+    return run(args)
+
+
 def _hil_record(args: argparse.Namespace) -> int:
     from host.cli.hil import run_record
 
@@ -84,6 +90,15 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     fit.add_argument("--save", metavar="DIR", help="write the lookup-table bundle (model + inverse) here")
     fit.set_defaults(run=_fit)
+
+    diag = sub.add_parser(
+        "diagnose", help="what the simulation gets wrong on a recording: name the cause, extend, measure the gain"
+    )
+    diag.add_argument("data", metavar="DATA.csv", help="measured data (t, u, y; optional load, temperature, p)")
+    diag.add_argument("--report", metavar="DIR", help="write report.md and PNG figures here")
+    diag.add_argument("--json", metavar="OUT.json", help="write the result as JSON")
+    diag.add_argument("--folds", type=int, default=4, help="blocked held-out folds in time (default 4)")
+    diag.set_defaults(run=_diagnose)
 
     hil = sub.add_parser("hil", help="the emulated rig: recordings with hidden effects")
     hil_sub = hil.add_subparsers(dest="hil_command", required=True, metavar="HIL_COMMAND")

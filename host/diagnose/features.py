@@ -1,0 +1,65 @@
+"""Regressors of the diagnosis models, all computed once per record.
+
+* Hysteresis: Preisach rows (``y_static = rows @ E + y_min``, see host.identify.preisach) on a
+  coarse grid, from the first sample where the memory is known.
+* Rate: the input's rate and its signed square (smoothed central differences) [u units / s].
+* Creep: the hysteresis output minus its slow first-order low-pass, for a time constant.
+* Load / temperature: the column, centred, and its product with the hysteresis output.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.signal import lfilter
+
+from host.identify.common import MemoryStart
+from host.identify.preisach import EverettGrid, regressor_chunks
+
+
+def preisach_rows(u: NDArray[np.float64], start: MemoryStart, levels: int) -> NDArray[np.float64]:
+    """Dense Preisach regressors (rows from ``start.index`` on), float32 to keep memory low."""
+    grid = EverettGrid(float(u.min()), float(u.max()), levels)
+    rows = np.zeros((u.size - start.index, grid.size), dtype=np.float32)
+    offset = 0
+    for block in regressor_chunks(u, grid, start, capacity=128):
+        rows[offset : offset + len(block)] = block
+        offset += len(block)
+    return rows
+
+
+def smoothed_rate(u: NDArray[np.float64], dt: float, window_s: float = 0.05) -> NDArray[np.float64]:
+    """Rate of ``u`` [units/s]: central difference, then a moving average over ``window_s``."""
+    rate = np.gradient(u, dt)
+    width = max(1, int(round(window_s / dt)))
+    kernel = np.ones(width) / width
+    return np.convolve(rate, kernel, mode="same")
+
+
+def slow_part(x: NDArray[np.float64], dt: float, tau_s: float) -> NDArray[np.float64]:
+    """``lowpass(x, tau) - x``: what a first-order creep element with time constant ``tau`` adds."""
+    alpha = 1.0 - np.exp(-dt / tau_s)
+    low = lfilter([alpha], [1.0, alpha - 1.0], x, zi=[x[0] * (1 - alpha)])[0]
+    return low - x
+
+
+def first_order(u: NDArray[np.float64], dt: float, tau_s: float) -> NDArray[np.float64]:
+    """``u`` through a unit-gain first-order lag of ``tau_s`` (0: unchanged), starting settled."""
+    if tau_s <= 0:
+        return u
+    alpha = 1.0 - np.exp(-dt / tau_s)
+    return lfilter([alpha], [1.0, alpha - 1.0], u, zi=[u[0] * (1 - alpha)])[0]
+
+
+def branch_offset(u: NDArray[np.float64], start: MemoryStart, share: float = 0.1) -> NDArray[np.float64]:
+    """Which branch the memory is on: a play operator's output minus the input, scaled to +-1.
+
+    The play's threshold is ``share`` of the input range; -1 on a rising branch, +1 on a
+    falling one, in between after a reversal.
+    """
+    from edge.hysteresis.pi import branch_play_state, play_outputs
+
+    threshold = share * float(np.ptp(u))
+    thresholds = np.array([threshold])
+    z0 = branch_play_state(float(u[0]), thresholds, start.branch)
+    return (play_outputs(u, thresholds, z0)[:, 0] - u) / threshold

@@ -1,0 +1,189 @@
+"""Baseline and extended models of the diagnosis, fitted on training rows only.
+
+Baseline (seed 000's Hammerstein structure without the neural net): a rate-independent
+Preisach hysteresis ``x = rows @ E`` (non-negative cell masses), followed by ARX
+``y(k) = sum a_i y(k-i) + sum b_j x(k-j) + c`` with ``na`` in 0..2, ``nb`` in 1..2 (no free
+delay) chosen by AIC on the training rows, and simulated (output error) over the whole record.
+
+An extension adds exogenous columns ``F`` to the ARX (``+ F(k) @ e``) and, for a dead time,
+replaces ``x`` by ``x(k - d)`` after refitting the hysteresis on correspondingly delayed rows.
+Every fit sees only the rows marked in ``train``; the memory (input history) is the whole
+record, since the input is known everywhere.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import nnls
+from scipy.signal import lfilter, lfilter_zi
+
+from host.diagnose.features import slow_part
+
+# all-pole dynamics: the rig's mechanics after the muscle are low-pass; a zero would put
+# derivative action in the baseline, which mimics rate-dependent hysteresis
+ORDERS = [(na, 1) for na in (0, 1, 2)]
+MAX_TIME_CONSTANT_S = 2.0
+
+
+@dataclass
+class FittedModel:
+    """A fitted baseline or extension and its simulation over the whole record."""
+
+    name: str
+    prediction: NDArray[np.float64]
+    na: int
+    nb: int
+    ar: NDArray[np.float64]
+    exogenous: NDArray[np.float64]
+    extra: dict[str, float] = field(default_factory=dict)
+    columns: list[str] = field(default_factory=list)
+
+
+def static_masses(rows: NDArray[np.float64], y: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np.float64]:
+    """Cell masses >= 0 with ``y ~ rows @ masses + offset`` on ``train`` rows.
+
+    The offset is eliminated by centring, then NNLS runs on the Cholesky factor of the centred
+    normal equations (small: one column per Everett cell).
+    """
+    design = np.asarray(rows[train], dtype=np.float64)
+    mean_row = design.mean(axis=0)
+    centred = y[train] - y[train].mean()
+    gram = design.T @ design - len(design) * np.outer(mean_row, mean_row)
+    gram[np.diag_indices_from(gram)] += 1e-8 * max(float(np.trace(gram)) / len(gram), 1e-300)
+    factor = np.linalg.cholesky(gram)
+    masses, _ = nnls(factor.T, np.linalg.solve(factor, design.T @ centred), maxiter=20 * len(gram))
+    return masses
+
+
+def fit_static(rows: NDArray[np.float32], y: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np.float64]:
+    """Hysteresis output ``x`` for the whole record, fitted as if there were no dynamics."""
+    x = rows.astype(np.float64) @ static_masses(rows, y, train)
+    return x - x[train].mean() + y[train].mean()
+
+
+def fit_hammerstein(
+    name: str,
+    rows: NDArray[np.float32],
+    y: NDArray[np.float64],
+    train: NDArray[np.bool_],
+    dt: float,
+    iterations: int = 3,
+    creep_tau_s: float | None = None,
+) -> tuple[FittedModel, NDArray[np.float64]]:
+    """Hysteresis and ARX fitted together by alternation (Narendra-Gallman).
+
+    Fitting the hysteresis first as if static lets it absorb the dynamics (a valve lag widens
+    the loops); so: fit ARX on ``x``, then refit the masses on the rows filtered by the ARX
+    (``y = (B/A) rows @ masses + c`` is linear in the masses), and repeat. Returns the model and
+    its hysteresis output ``x``.
+
+    With ``creep_tau_s`` the model also has a creep operator ``e (lowpass(x, tau) - x)`` in its
+    drive; that term is linear in ``x``, so it joins the filtered regressors as
+    ``e (1/A) creep(rows)`` and the hysteresis is fitted with the creep present.
+    """
+
+    def arx(x: NDArray[np.float64]) -> FittedModel:
+        if creep_tau_s is None:
+            return fit_arx(name, x, y, train, dt=dt)
+        return fit_arx(name, x, y, train, slow_part(x, dt, creep_tau_s)[:, None], ["creep"], dt)
+
+    x = fit_static(rows, y, train)
+    model = arx(x)
+    dense = rows.astype(np.float64)
+    creep_rows = slow_part_columns(dense, dt, creep_tau_s) if creep_tau_s is not None else None
+    for _ in range(iterations):
+        b = model.exogenous[: model.nb]
+        a = np.r_[1.0, -model.ar]
+        if abs(b.sum()) < 1e-12:
+            break
+        filtered = _filter_columns(b, a, dense)
+        if creep_rows is not None:
+            filtered = filtered + model.exogenous[model.nb] * _filter_columns(np.ones(1), a, creep_rows)
+        masses = static_masses(filtered, y, train)
+        x_new = dense @ masses
+        candidate = arx(x_new)
+        if rmse(candidate.prediction[train], y[train]) >= rmse(model.prediction[train], y[train]):
+            break
+        model, x = candidate, x_new
+    return model, x
+
+
+def _filter_columns(
+    b: NDArray[np.float64], a: NDArray[np.float64], columns: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Every column through ``b/a``, starting settled at the first row."""
+    if a.size == 1 and b.size == 1:
+        return b[0] / a[0] * columns
+    zi = lfilter_zi(b, a)[:, None] * columns[:1]
+    return lfilter(b, a, columns, axis=0, zi=zi)[0]
+
+
+def slow_part_columns(columns: NDArray[np.float64], dt: float, tau_s: float) -> NDArray[np.float64]:
+    """:func:`host.diagnose.features.slow_part` applied to every column."""
+    alpha = 1.0 - np.exp(-dt / tau_s)
+    zi = columns[:1] * (1 - alpha)
+    low = lfilter([alpha], [1.0, alpha - 1.0], columns, axis=0, zi=zi)[0]
+    return low - columns
+
+
+def _lagged(signal: NDArray[np.float64], lags: range) -> NDArray[np.float64]:
+    return np.column_stack([np.concatenate([np.full(lag, signal[0]), signal[: signal.size - lag]]) for lag in lags])
+
+
+def fit_arx(
+    name: str,
+    x: NDArray[np.float64],
+    y: NDArray[np.float64],
+    train: NDArray[np.bool_],
+    extra: NDArray[np.float64] | None = None,
+    columns: list[str] | None = None,
+    dt: float = 0.01,
+) -> FittedModel:
+    """ARX from ``x`` (plus ``extra`` columns) to ``y``: order by AIC, then simulated.
+
+    Poles slower than :data:`MAX_TIME_CONSTANT_S` are refused: the baseline's linear dynamics
+    are the rig's mechanics; a slower relaxation is what the creep extension stands for.
+    """
+    pole_limit = float(np.exp(-dt / MAX_TIME_CONSTANT_S))
+    usable = train.copy()
+    usable[:2] = False
+    extra = np.zeros((x.size, 0)) if extra is None else extra
+    best: tuple[float, FittedModel] | None = None
+    for na, nb in ORDERS:
+        past_y = _lagged(y, range(1, na + 1)) if na else np.zeros((y.size, 0))
+        inputs = _lagged(x, range(0, nb))
+        design = np.column_stack([past_y, inputs, extra, np.ones(y.size)])
+        theta, *_ = np.linalg.lstsq(design[usable], y[usable], rcond=None)
+        ar = theta[:na]
+        if na and np.any(np.abs(np.roots(np.r_[1.0, -ar])) >= pole_limit):
+            continue  # unstable, or slower than the rig's mechanics (slow relaxation is creep)
+        exogenous = theta[na:]
+        drive = np.column_stack([inputs, extra, np.ones(y.size)]) @ exogenous
+        prediction = lfilter([1.0], np.r_[1.0, -ar], drive, zi=_steady_state(ar, y[0]))[0]
+        model = FittedModel(name, prediction, na, nb, ar, exogenous, columns=list(columns or []))
+        # the model is used in simulation: judge the order by its simulation error, not by the
+        # one-step equation error (which favours near-integrators that simulate badly)
+        residual = prediction[usable] - y[usable]
+        aic = usable.sum() * np.log(max(float(residual @ residual) / usable.sum(), 1e-300)) + 2 * theta.size
+        if best is None or aic < best[0]:
+            best = (aic, model)
+    assert best is not None, "ARX with na=0 is always stable"
+    return best[1]
+
+
+def _steady_state(ar: NDArray[np.float64], y0: float) -> NDArray[np.float64]:
+    """lfilter initial conditions so that the simulation starts at ``y0`` (with the drive at its level)."""
+    if ar.size == 0:
+        return np.zeros(0)
+    # direct form II transposed with b = [1]: start as if y had been y0 for ever
+    zi = np.zeros(ar.size)
+    for i in range(ar.size):
+        zi[i] = y0 * ar[i:].sum()
+    return zi
+
+
+def rmse(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
+    return float(np.sqrt(np.mean((a - b) ** 2)))
