@@ -13,6 +13,8 @@ with a flow-rate limit and an optional dead time. Creep is a slow viscoelastic r
 the contraction; temperature softens the bladder (``b`` falls) and the braid friction. Braid
 friction can grow with sliding speed (fibre friction is velocity strengthening), which widens
 the loops with the input rate without adding a lag at reversals: rate-dependent hysteresis.
+It grows with the square of the speed (viscous-squared seal/braid friction), so loops widen
+little at slow rates and strongly at fast ones.
 
 Pure functions in python-control's shape: ``update(t, x, u, params) -> x`` advances one fixed
 step ``params.dt_s``; ``output(t, x, params) -> Outputs`` reads the noise-free sensor
@@ -83,7 +85,7 @@ class PlantParams:
     slip_stiffness_n_per_m: tuple[float, ...] = (40e3, 25e3, 15e3, 10e3, 6e3, 4e3)
     slip_break_force_n: tuple[float, ...] = (4.0, 5.0, 6.0, 6.0, 5.0, 4.0)
     damping_n_s_per_m: float = 100.0  # viscous damping of the load motion
-    rate_friction_s_per_m: float = 0.0  # braid friction grows by this factor per m/s of sliding speed
+    rate_friction_s_per_m: float = 0.0  # braid friction grows by (this x sliding speed)^2
     creep_fraction: float = 0.0  # relaxed share of the contraction under a constant load
     creep_time_constant_s: float = 20.0
     temperature: TemperatureProfile = field(default_factory=TemperatureProfile)
@@ -138,9 +140,9 @@ def initial_state(params: PlantParams, pressure_bar: float = 0.0) -> PlantState:
 
 
 def _friction_scale(params: PlantParams, t: float, speed_m_s: float) -> float:
-    """Braid friction relative to nominal: softened by warmth, raised by sliding speed."""
+    """Braid friction relative to nominal: softened by warmth, raised by the square of sliding speed."""
     warmth = params.temperature.at(t) - params.reference_temperature_c
-    return (1.0 - params.friction_softening_per_k * warmth) * (1.0 + params.rate_friction_s_per_m * abs(speed_m_s))
+    return (1.0 - params.friction_softening_per_k * warmth) * (1.0 + (params.rate_friction_s_per_m * speed_m_s) ** 2)
 
 
 def _balance(params: PlantParams, t: float, x: PlantState, pressure_bar: float, damping: float) -> float:

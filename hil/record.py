@@ -51,8 +51,14 @@ def record(
     effect: str = "none",
     rate_hz: float = 100.0,
     params: PlantParams | None = None,
+    decoy_columns: bool = False,
 ) -> Recording:
-    """Run ``scenario`` for ``duration_s`` with ``effect`` and sample the sensors at ``rate_hz``."""
+    """Run ``scenario`` for ``duration_s`` with ``effect`` and sample the sensors at ``rate_hz``.
+
+    With ``decoy_columns`` the load and temperature columns vary (load steps, a warming room)
+    without touching the physics, unless the effect is that variable's own: the test of a
+    diagnosis that must not blame a column for merely moving.
+    """
     if scenario not in SCENARIOS:
         raise ValueError(f"scenario {scenario!r} unknown; choose one of {', '.join(SCENARIOS)}")
     base = params or PlantParams()
@@ -72,6 +78,13 @@ def record(
         x = update(t, x, command, plant)
     data = np.array(samples)
     n = len(data)
+    if decoy_columns:
+        if effect != "load_dependence":
+            steps = rng.permutation([0.0, 1.5, 3.5, 5.5, 7.5])
+            data[:, 4] = steps[np.minimum((data[:, 0] / duration_s * steps.size).astype(int), steps.size - 1)]
+        if effect != "temperature_drift":
+            data[:, 5] = 22.0 + rng.uniform(5.0, 15.0) * data[:, 0] / duration_s
+    truth["decoy_columns"] = bool(decoy_columns)
     return Recording(
         t=data[:, 0],
         u=data[:, 1],

@@ -43,7 +43,7 @@ def test_hysteresis_loop_exists_without_any_effect():
 
 def test_loops_widen_with_rate_only_with_rate_dependence():
     plain = loop_area(BASE, 0.5) / loop_area(BASE, 0.05)
-    faster_friction = replace(BASE, rate_friction_s_per_m=30.0)
+    faster_friction = replace(BASE, rate_friction_s_per_m=40.0)
     widened = loop_area(faster_friction, 0.5) / loop_area(faster_friction, 0.05)
     assert plain < 1.3
     assert widened > 1.6

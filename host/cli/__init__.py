@@ -113,6 +113,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="hidden effect, parameters drawn from physical ranges (default none)",
     )
     rec.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="sample rate, divides 1000 (default 100)")
+    rec.add_argument(
+        "--decoy-columns", action="store_true", help="let load and temperature columns vary without any physical effect"
+    )
     rec.add_argument("--out", required=True, metavar="CSV", help="output CSV; the truth goes to <name>.truth.json")
     rec.set_defaults(run=_hil_record)
     srv = hil_sub.add_parser("serve", help="real-time mode: serve the emulated rig's serial DAQ on a pseudo-terminal")

@@ -12,7 +12,9 @@ def run_record(args: argparse.Namespace) -> int:
     if not 1.0 <= args.duration <= 24 * 3600:
         raise DataError(f"--duration {args.duration} s is outside 1 s .. 24 h")
     try:
-        recording = record(args.scenario, args.seed, args.duration, args.effect, args.rate)
+        recording = record(
+            args.scenario, args.seed, args.duration, args.effect, args.rate, decoy_columns=args.decoy_columns
+        )
     except ValueError as exc:
         raise DataError(str(exc)) from exc
     path = write_recording(recording, args.out)

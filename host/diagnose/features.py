@@ -63,3 +63,16 @@ def branch_offset(u: NDArray[np.float64], start: MemoryStart, share: float = 0.1
     thresholds = np.array([threshold])
     z0 = branch_play_state(float(u[0]), thresholds, start.branch)
     return (play_outputs(u, thresholds, z0)[:, 0] - u) / threshold
+
+
+def rate_play(u: NDArray[np.float64], threshold: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A play operator with a time-varying threshold: ``z = clip(z_prev, u - r, u + r)``."""
+    out = np.empty_like(u)
+    z = float(u[0])
+    for k, (value, r) in enumerate(zip(u.tolist(), threshold.tolist())):
+        if z < value - r:
+            z = value - r
+        elif z > value + r:
+            z = value + r
+        out[k] = z
+    return out

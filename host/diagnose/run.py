@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from edge.errors import DataError
 from host.data import Measurement
 from host.diagnose.evidence import baseline_evidence
-from host.diagnose.features import branch_offset, first_order, preisach_rows, smoothed_rate
+from host.diagnose.features import branch_offset, first_order, preisach_rows, rate_play, smoothed_rate
 from host.diagnose.hammerstein import FittedModel, fit_arx, fit_hammerstein, rmse
 from host.identify.common import MemoryStart, memory_start
 
@@ -32,7 +32,7 @@ CREEP_TAUS_S = (2.0, 5.0, 10.0, 20.0, 40.0, 80.0)
 # (seed 004 models a PAM as a first-order lag plus a dead time); valve-sized, not delay-sized
 ACTUATOR_LAGS_S = (0.0, 0.015, 0.03, 0.05)
 DELAYS_S = (0.02, 0.04, 0.07, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5)
-RATE_SHIFTS_S = (0.02, 0.04, 0.07, 0.1, 0.15, 0.2, 0.3)
+RATE_WIDENINGS = (0.005, 0.01, 0.02, 0.035, 0.05, 0.08, 0.12)  # share of the input range at the 95th-percentile rate
 MIN_SAMPLES = 400
 
 
@@ -57,19 +57,24 @@ class Context:
     _rate_rows: dict[tuple[float, float], NDArray[np.float32]] = field(default_factory=dict)
 
     def rate_rows(self, shift_s: float) -> NDArray[np.float32]:
-        """Preisach rows of the lagged input moved by its own rate: ``u - shift * du/dt``.
+        """Preisach rows of the hysteresis with rate-dependent thresholds (seed 001 / Ang).
 
-        That is the hysteresis with rate-dependent thresholds (seed 001 / Ang): a relay at
-        (alpha, beta) switches at ``alpha + shift |du/dt|`` rising and ``beta - shift |du/dt|``
-        falling. Cached per (lag, shift).
+        A relay at (alpha, beta) switches at ``alpha + w(t)`` rising and ``beta - w(t)`` falling,
+        the widening ``w = share * range * (|du/dt| / rate95)^2`` growing with the square of the
+        input rate (``rate95``: the 95th percentile of |du/dt|). That is the same as feeding the
+        relays the input through a play operator of threshold ``w(t)``: it lags while the input
+        moves fast and catches up as it slows; it never overshoots a reversal. A dead time's lag
+        grows only in proportion to the rate, which is what tells the two apart. Cached per
+        (lag, share).
         """
         key = (self.lag_s, shift_s)
         if key not in self._rate_rows:
             lagged = first_order(self.full_u, self.dt, self.lag_s)
-            shifted = lagged - shift_s * smoothed_rate(lagged, self.dt)
-            shifted = np.clip(shifted, lagged.min(), lagged.max())
+            rate = np.abs(smoothed_rate(lagged, self.dt))
+            scale = float(np.percentile(rate, 95)) or 1.0
+            effective = rate_play(lagged, shift_s * float(np.ptp(lagged)) * (rate / scale) ** 2)
             assert self.start is not None
-            self._rate_rows[key] = preisach_rows(shifted, self.start, self.levels)
+            self._rate_rows[key] = preisach_rows(effective, self.start, self.levels)
         return self._rate_rows[key]
 
     @property
@@ -117,7 +122,7 @@ def extension(ctx: Context, cause: str) -> FittedModel | None:
     x = ctx.x
     xc = centred(x, ctx.train)
     if cause == "rate_dependence":  # rate-dependent thresholds (seed 001 / Ang), dynamics refitted
-        return _best_hammerstein(ctx, cause, "threshold_rate_gain_s", RATE_SHIFTS_S, ctx.rate_rows)
+        return _best_hammerstein(ctx, cause, "threshold_widening_at_rate95", RATE_WIDENINGS, ctx.rate_rows)
     if cause == "creep":  # a creep operator: first-order relaxation of the hysteresis output
         best_creep: FittedModel | None = None
         for tau in CREEP_TAUS_S:
@@ -317,7 +322,8 @@ def _runner_up(scores: dict[str, float], best: str) -> str:
 def _describe(model: FittedModel, ctx: Context) -> dict[str, object]:
     """A readable description of an extended model and its fitted parameters."""
     terms = {
-        "rate_dependence": "rate-dependent thresholds (seed 001 / Ang): hysteresis of u - c du/dt",
+        "rate_dependence": "rate-dependent thresholds (seed 001 / Ang): relay thresholds widen with the "
+        "square of the input rate",
         "creep": "creep operator: first-order relaxation of the hysteresis output, y gets e*(lowpass(x, tau) - x)",
         "transport_delay": "dead time before the hysteresis: x(k - d)",
         "load_dependence": "load terms after the force models of seeds 000/004: y gets "

