@@ -32,7 +32,7 @@ def rate_lag(
     residual: NDArray[np.float64], rate: NDArray[np.float64], dt: float, max_lag_s: float = 1.0
 ) -> dict[str, float]:
     """Lag [s] at which the input rate best explains the residual (positive: residual later)."""
-    max_lag = max(1, int(max_lag_s / dt))
+    max_lag = max(1, min(int(max_lag_s / dt), residual.size // 4))
     r = (residual - residual.mean()) / (residual.std() or 1.0)
     v = (rate - rate.mean()) / (rate.std() or 1.0)
     values = [float(np.mean(r[k:] * v[: v.size - k])) for k in range(0, max_lag)]

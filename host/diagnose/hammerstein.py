@@ -26,6 +26,7 @@ from host.diagnose.features import slow_part
 # derivative action in the baseline, which mimics rate-dependent hysteresis
 ORDERS = [(na, 1) for na in (0, 1, 2)]
 MAX_TIME_CONSTANT_S = 2.0
+STATIC_ROWS = 10_000
 
 
 @dataclass
@@ -46,14 +47,25 @@ def static_masses(rows: NDArray[np.float64], y: NDArray[np.float64], train: NDAr
     """Cell masses >= 0 with ``y ~ rows @ masses + offset`` on ``train`` rows.
 
     The offset is eliminated by centring, then NNLS runs on the Cholesky factor of the centred
-    normal equations (small: one column per Everett cell).
+    normal equations (small: one column per Everett cell). The rows carry the hysteresis memory,
+    so evenly spaced training rows (at most :data:`STATIC_ROWS`) are an exact subproblem; this
+    keeps the many refits of a diagnosis independent of the record's length.
     """
-    design = np.asarray(rows[train], dtype=np.float64)
-    mean_row = design.mean(axis=0)
-    centred = y[train] - y[train].mean()
-    gram = design.T @ design - len(design) * np.outer(mean_row, mean_row)
-    gram[np.diag_indices_from(gram)] += 1e-8 * max(float(np.trace(gram)) / len(gram), 1e-300)
-    factor = np.linalg.cholesky(gram)
+    chosen = np.flatnonzero(train)
+    chosen = chosen[:: max(1, chosen.size // STATIC_ROWS)]
+    design = np.asarray(rows[chosen], dtype=np.float64)
+    design -= design.mean(axis=0)  # centred explicitly: D^T D stays positive semi-definite
+    centred = y[chosen] - y[chosen].mean()
+    gram = design.T @ design
+    scale = max(float(np.trace(gram)) / len(gram), 1e-300)
+    for ridge in (1e-8, 1e-6, 1e-4, 1e-2):  # cells no training row visits make gram singular
+        try:
+            factor = np.linalg.cholesky(gram + ridge * scale * np.eye(len(gram)))
+            break
+        except np.linalg.LinAlgError:
+            continue
+    else:
+        raise np.linalg.LinAlgError("hysteresis normal equations are not positive definite even with a ridge")
     masses, _ = nnls(factor.T, np.linalg.solve(factor, design.T @ centred), maxiter=20 * len(gram))
     return masses
 

@@ -139,7 +139,11 @@ def extension(ctx: Context, cause: str) -> FittedModel | None:
             steps = max(1, int(round(delay_s / ctx.dt)))
             return np.concatenate([np.repeat(ctx.rows[:1], steps, axis=0), ctx.rows[:-steps]])
 
-        return _best_hammerstein(ctx, cause, "dead_time_s", [d for d in DELAYS_S if d >= ctx.dt], delayed_rows)
+        longest = 0.1 * ctx.y.size * ctx.dt  # a shift of at most a tenth of the record
+        delays = [d for d in DELAYS_S if ctx.dt <= d <= longest]
+        if not delays:
+            return None
+        return _best_hammerstein(ctx, cause, "dead_time_s", delays, delayed_rows)
     column = {"load_dependence": "load", "temperature_drift": "temperature"}[cause]
     values = ctx.extras.get(column)
     if values is None or np.ptp(values) <= 0:
@@ -286,10 +290,20 @@ def diagnose(m: Measurement, *, folds: int = 4, min_gain: float = 0.05, levels: 
             else f"the best extension ({best}) gains {scores[best]:.1%} on average but not on every fold "
             f"(fold gains {', '.join(f'{g:.1%}' for g in fold_gains[best])})"
         )
-        reason = f"no extension improves held-out error meaningfully: {why}; what remains looks like noise"
+        reason = f"no extension improves held-out error meaningfully: {why}"
     ctx.train = np.ones(n, dtype=bool)
     baseline_full = fit_baseline(ctx)
     extended_full = extension(ctx, cause) if cause != "none" else None
+    evidence = baseline_evidence(baseline_full.prediction - ctx.y, ctx.u, ctx.rate, ctx.extras, ctx.dt)
+    if cause == "none":
+        whiteness = evidence["whiteness"]
+        if whiteness["p_value"] < 0.01:  # type: ignore[index]
+            reason += (
+                f"; the baseline's residual is not white (Ljung-Box p = {whiteness['p_value']:.1g}), so something "  # type: ignore[index]
+                "is left that none of the five extensions captures"
+            )
+        else:
+            reason += "; the baseline's residual is white: what remains looks like noise"
     baseline_rmse = float(np.mean(base_scores))
     extended_rmse = float(np.mean(ext_scores[cause])) if cause != "none" else baseline_rmse
     return Diagnosis(
@@ -309,7 +323,7 @@ def diagnose(m: Measurement, *, folds: int = 4, min_gain: float = 0.05, levels: 
         baseline_full=baseline_full,
         extended_full=extended_full,
         start_index=start_index,
-        evidence=baseline_evidence(baseline_full.prediction - ctx.y, ctx.u, ctx.rate, ctx.extras, ctx.dt),
+        evidence=evidence,
         context=ctx,
     )
 
