@@ -56,7 +56,7 @@ class Context:
     levels: int = 12
     _rate_rows: dict[tuple[float, float], NDArray[np.float32]] = field(default_factory=dict)
 
-    def rate_rows(self, shift_s: float) -> NDArray[np.float32]:
+    def rate_rows(self, widening: float) -> NDArray[np.float32]:
         """Preisach rows of the hysteresis with rate-dependent thresholds (seed 001 / Ang).
 
         A relay at (alpha, beta) switches at ``alpha + w(t)`` rising and ``beta - w(t)`` falling,
@@ -67,12 +67,12 @@ class Context:
         grows only in proportion to the rate, which is what tells the two apart. Cached per
         (lag, share).
         """
-        key = (self.lag_s, shift_s)
+        key = (self.lag_s, widening)
         if key not in self._rate_rows:
             lagged = first_order(self.full_u, self.dt, self.lag_s)
             rate = np.abs(smoothed_rate(lagged, self.dt))
             scale = float(np.percentile(rate, 95)) or 1.0
-            effective = rate_play(lagged, shift_s * float(np.ptp(lagged)) * (rate / scale) ** 2)
+            effective = rate_play(lagged, widening * float(np.ptp(lagged)) * (rate / scale) ** 2)
             assert self.start is not None
             self._rate_rows[key] = preisach_rows(effective, self.start, self.levels)
         return self._rate_rows[key]
@@ -82,28 +82,11 @@ class Context:
         return self.lag_rows[self.lag_s]
 
 
-def _fit_best(ctx: Context, name: str, options: dict[str, tuple], build: Callable[[object], tuple]) -> FittedModel:
-    """Fit one model per option value; keep the one with the lowest *training* RMSE."""
-    best: FittedModel | None = None
-    for value in options["values"]:
-        x, extra, columns = build(value)
-        model = fit_arx(name, x, ctx.y, ctx.train, extra, columns, ctx.dt)
-        model.extra[options["key"]] = float(value)
-        if best is None or rmse(model.prediction[ctx.train], ctx.y[ctx.train]) < rmse(
-            best.prediction[ctx.train], ctx.y[ctx.train]
-        ):
-            best = model
-    assert best is not None
-    return best
-
-
-def _best_hammerstein(
-    ctx: Context, name: str, key: str, values: Sequence[float], rows_for: Callable[[float], NDArray[np.float32]]
-) -> FittedModel:
-    """Refit hysteresis + dynamics on ``rows_for(v)`` for each ``v``; best on the training rows."""
+def _best_of(ctx: Context, key: str, values: Sequence[float], fit_for: Callable[[float], FittedModel]) -> FittedModel:
+    """``fit_for(v)`` for each candidate ``v``; the one with the lowest *training* RMSE wins."""
     best: FittedModel | None = None
     for value in values:
-        model, _ = fit_hammerstein(name, rows_for(value), ctx.y, ctx.train, ctx.dt)
+        model = fit_for(value)
         model.extra[key] = float(value)
         if best is None or rmse(model.prediction[ctx.train], ctx.y[ctx.train]) < rmse(
             best.prediction[ctx.train], ctx.y[ctx.train]
@@ -111,6 +94,13 @@ def _best_hammerstein(
             best = model
     assert best is not None
     return best
+
+
+def _refit_on(
+    ctx: Context, name: str, rows_for: Callable[[float], NDArray[np.float32]]
+) -> Callable[[float], FittedModel]:
+    """A candidate fitter: hysteresis + dynamics refitted on ``rows_for(v)``."""
+    return lambda value: fit_hammerstein(name, rows_for(value), ctx.y, ctx.train, ctx.dt)[0]
 
 
 def centred(values: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np.float64]:
@@ -122,17 +112,14 @@ def extension(ctx: Context, cause: str) -> FittedModel | None:
     x = ctx.x
     xc = centred(x, ctx.train)
     if cause == "rate_dependence":  # rate-dependent thresholds (seed 001 / Ang), dynamics refitted
-        return _best_hammerstein(ctx, cause, "threshold_widening_at_rate95", RATE_WIDENINGS, ctx.rate_rows)
+        return _best_of(ctx, "threshold_widening_at_rate95", RATE_WIDENINGS, _refit_on(ctx, cause, ctx.rate_rows))
     if cause == "creep":  # a creep operator: first-order relaxation of the hysteresis output
-        best_creep: FittedModel | None = None
-        for tau in CREEP_TAUS_S:
-            model, _ = fit_hammerstein(cause, ctx.rows, ctx.y, ctx.train, ctx.dt, creep_tau_s=tau)
-            model.extra["creep_time_constant_s"] = tau
-            if best_creep is None or rmse(model.prediction[ctx.train], ctx.y[ctx.train]) < rmse(
-                best_creep.prediction[ctx.train], ctx.y[ctx.train]
-            ):
-                best_creep = model
-        return best_creep
+        return _best_of(
+            ctx,
+            "creep_time_constant_s",
+            CREEP_TAUS_S,
+            lambda tau: fit_hammerstein(cause, ctx.rows, ctx.y, ctx.train, ctx.dt, creep_tau_s=tau)[0],
+        )
     if cause == "transport_delay":  # a dead time before the hysteresis, dynamics refitted with it
 
         def delayed_rows(delay_s: float) -> NDArray[np.float32]:
@@ -143,7 +130,7 @@ def extension(ctx: Context, cause: str) -> FittedModel | None:
         delays = [d for d in DELAYS_S if ctx.dt <= d <= longest]
         if not delays:
             return None
-        return _best_hammerstein(ctx, cause, "dead_time_s", delays, delayed_rows)
+        return _best_of(ctx, "dead_time_s", delays, _refit_on(ctx, cause, delayed_rows))
     column = {"load_dependence": "load", "temperature_drift": "temperature"}[cause]
     values = ctx.extras.get(column)
     if values is None or np.ptp(values) <= 0:
