@@ -1,14 +1,17 @@
 """Baseline and extended models of the diagnosis, fitted on training rows only.
 
 Baseline (seed 000's Hammerstein structure without the neural net): a rate-independent
-Preisach hysteresis ``x = rows @ E`` (non-negative cell masses), followed by ARX
-``y(k) = sum a_i y(k-i) + sum b_j x(k-j) + c`` with ``na`` in 0..2, ``nb`` in 1..2 (no free
-delay) chosen by AIC on the training rows, and simulated (output error) over the whole record.
+Preisach hysteresis ``x = rows @ E`` (non-negative cell masses), followed by all-pole ARX
+``y(k) = sum a_i y(k-i) + b x(k) + c`` with ``na`` in 0..2 and time constants of at most
+:data:`MAX_TIME_CONSTANT_S`, the order chosen by AIC on the *simulation* error of the training
+rows. Hysteresis and dynamics are fitted together by alternation (:func:`fit_hammerstein`) and
+simulated (output error) over the whole record.
 
-An extension adds exogenous columns ``F`` to the ARX (``+ F(k) @ e``) and, for a dead time,
-replaces ``x`` by ``x(k - d)`` after refitting the hysteresis on correspondingly delayed rows.
-Every fit sees only the rows marked in ``train``; the memory (input history) is the whole
-record, since the input is known everywhere.
+Extensions either add exogenous columns to the ARX drive (load and temperature terms), add a
+creep operator inside the alternation, or refit the whole model on other hysteresis rows (a
+dead time: delayed rows; rate-dependent thresholds: rows of a rate-dependent play of the
+input). Every fit sees only the rows marked in ``train``; the memory (input history) is the
+whole record, since the input is known everywhere.
 """
 
 from __future__ import annotations
