@@ -226,7 +226,7 @@ def simulate(
     commands_bar: np.ndarray, params: PlantParams, x0: PlantState | None = None
 ) -> tuple[np.ndarray, PlantState]:
     """Run ``update`` over a command sequence (one per step); returns outputs (N x 4) and the last state."""
-    x = initial_state(params, float(commands_bar[0]) if x0 is None else 0.0) if x0 is None else x0
+    x = x0 if x0 is not None else initial_state(params, float(commands_bar[0]))
     out = np.empty((commands_bar.size, 4))
     dt = params.dt_s
     for i, u in enumerate(commands_bar.tolist()):
