@@ -47,6 +47,7 @@ class ADS1x15Emulator:
         self._busy_until: float | None = None  # single-shot conversion in progress
         self._continuous_since: float | None = None
         self._last_continuous = -1
+        self.stuck_busy = False  # fault: the OS bit never reports a finished conversion
 
     def conversion_time(self, config: int | None = None) -> float:
         """Seconds per conversion at the configured data rate."""
@@ -78,7 +79,7 @@ class ADS1x15Emulator:
                 self._last_continuous = completed
 
     def _converting(self) -> bool:
-        return self._busy_until is not None or self._continuous_since is not None
+        return self.stuck_busy or self._busy_until is not None or self._continuous_since is not None
 
     def write(self, payload: bytes) -> None:
         self._update()
