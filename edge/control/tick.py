@@ -1,0 +1,92 @@
+"""The per-tick control law: ``Controller.tick(t, dt, readings) -> Command`` with no I/O.
+
+Structure (seed 000 Fig 12, seed 003 eq 8): the desired trajectory goes through the inverse
+hysteresis model (feedforward, a lookup table), PID feedback on the measured output is added,
+then limits: pressure range and slew rate. Time and readings come in as arguments, so tests
+run thousands of ticks without a clock.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from edge.control.pid import PID, PIDGains
+from edge.hysteresis.lut import CompiledModel
+
+
+@dataclass(frozen=True)
+class Readings:
+    """Sensor values of one tick: contraction [mm], pressure [bar]."""
+
+    contraction_mm: float
+    pressure_bar: float = float("nan")
+
+
+@dataclass(frozen=True)
+class Command:
+    """What to send this tick, and why (for telemetry)."""
+
+    pressure_bar: float
+    reference_mm: float
+    feedforward_bar: float
+    feedback_bar: float
+    saturated: bool
+
+
+@dataclass
+class Limits:
+    """Pressure range [bar] and the fastest allowed change [bar/s]."""
+
+    pressure_min_bar: float = 0.0
+    pressure_max_bar: float = 6.0
+    slew_bar_per_s: float = 20.0
+
+
+class Controller:
+    """Inverse-hysteresis feedforward + PID + limits.
+
+    Args:
+        reference: desired contraction [mm] as a function of time [s].
+        gains: PID gains (bar per mm, bar per mm s, bar s per mm).
+        inverse: lookup-table inverse model (contraction -> pressure), or None for PID alone.
+        limits: pressure range and slew rate.
+    """
+
+    def __init__(
+        self,
+        reference: Callable[[float], float],
+        gains: PIDGains,
+        inverse: CompiledModel | None = None,
+        limits: Limits | None = None,
+    ) -> None:
+        self.reference = reference
+        self.limits = limits or Limits()
+        self.inverse = inverse
+        self.pid = PID(
+            PIDGains(
+                gains.kp, gains.ki, gains.kd, gains.tau_d_s, self.limits.pressure_min_bar, self.limits.pressure_max_bar
+            )
+        )
+        self._last_bar: float | None = None
+
+    def arm(self, readings: Readings, pressure_bar: float = 0.0) -> None:
+        """Bumpless start from the present state (feedforward memory reset to the rest state)."""
+        if self.inverse is not None:
+            self.inverse.reset()
+        self.pid.reset(readings.contraction_mm, 0.0)
+        self._last_bar = pressure_bar
+
+    def tick(self, t: float, dt: float, readings: Readings) -> Command:
+        reference = self.reference(t)
+        feedforward = self.inverse.step(reference) if self.inverse is not None else 0.0
+        total = self.pid.step(reference, readings.contraction_mm, dt, bias=feedforward)
+        feedback = total - feedforward
+        lim = self.limits
+        if self._last_bar is not None:
+            step = lim.slew_bar_per_s * dt
+            total = min(max(total, self._last_bar - step), self._last_bar + step)
+        command = min(max(total, lim.pressure_min_bar), lim.pressure_max_bar)
+        saturated = command != feedforward + feedback
+        self._last_bar = command
+        return Command(command, reference, feedforward, feedback, saturated)
