@@ -1,0 +1,126 @@
+"""Safety state machine around the control law: configure -> armed -> running -> safe.
+
+The supervisor is pure like the tick: each call gets the tick's readings and health flags and
+returns the command to send. Any fault moves it to ``SAFE`` in that same tick: the command is
+the vent state (valve disabled, zero pressure) and the reason is kept. ``SAFE`` is latched:
+only :meth:`Supervisor.reset` leaves it, back to ``CONFIGURED``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import Enum
+
+from edge.control.tick import Command, Controller, Readings
+
+
+class State(Enum):
+    CONFIGURED = "configured"
+    ARMED = "armed"
+    RUNNING = "running"
+    SAFE = "safe"
+
+
+@dataclass(frozen=True)
+class SafetyLimits:
+    """Bounds that end a run (units in the names)."""
+
+    contraction_min_mm: float = -9.0
+    contraction_max_mm: float = 145.0
+    pressure_max_bar: float = 6.5
+    tracking_error_max_mm: float = 25.0
+    tracking_grace_s: float = 3.0  # after arming, the loop may still be converging
+    bus_error_streak: int = 3
+    overrun_streak: int = 5
+
+
+@dataclass(frozen=True)
+class Health:
+    """What the runtime learned about this tick apart from the readings."""
+
+    bus_error: bool = False
+    overrun: bool = False
+    estop: bool = False
+
+
+@dataclass
+class Outcome:
+    """The tick's decision: what to command, whether the valve stays enabled, the state."""
+
+    pressure_bar: float
+    valve_enabled: bool
+    state: State
+    fault: str | None = None
+    command: Command | None = None
+
+
+VENT = 0.0
+
+
+@dataclass
+class Supervisor:
+    """Runs ``controller`` while everything is healthy; vents and latches on the first fault."""
+
+    controller: Controller
+    limits: SafetyLimits = field(default_factory=SafetyLimits)
+    state: State = State.CONFIGURED
+    fault: str | None = None
+    _bus_errors: int = 0
+    _overruns: int = 0
+    _last_pressure: float = 0.0
+    _armed_at: float | None = None
+
+    def arm(self, readings: Readings) -> None:
+        if self.state is not State.CONFIGURED:
+            raise RuntimeError(f"cannot arm from {self.state.value}; reset first")
+        self.controller.arm(readings)
+        self._bus_errors = self._overruns = 0
+        self._armed_at = None
+        self.state = State.ARMED
+
+    def reset(self) -> None:
+        """Leave the latched safe state (an operator's explicit action)."""
+        self.state, self.fault = State.CONFIGURED, None
+
+    def _trip(self, reason: str) -> Outcome:
+        if self.state is not State.SAFE:
+            self.state, self.fault = State.SAFE, reason
+        return Outcome(VENT, False, self.state, self.fault)
+
+    def tick(self, t: float, dt: float, readings: Readings | None, health: Health = Health()) -> Outcome:
+        """One tick: ``readings`` is None when the sensors could not be read this tick."""
+        if self.state in (State.CONFIGURED, State.SAFE):
+            return Outcome(VENT, False, self.state, self.fault)
+        lim = self.limits
+        if health.estop:
+            return self._trip("e-stop pressed")
+        self._bus_errors = self._bus_errors + 1 if health.bus_error or readings is None else 0
+        if self._bus_errors >= lim.bus_error_streak:
+            return self._trip(f"{self._bus_errors} consecutive bus errors")
+        self._overruns = self._overruns + 1 if health.overrun else 0
+        if self._overruns >= lim.overrun_streak:
+            return self._trip(f"{self._overruns} consecutive deadline overruns")
+        if readings is None:
+            return Outcome(VENT if self.state is State.ARMED else self._last_pressure, True, self.state)
+        y, p = readings.contraction_mm, readings.pressure_bar
+        if not math.isfinite(y):
+            return self._trip("contraction reading is not finite")
+        if not lim.contraction_min_mm <= y <= lim.contraction_max_mm:
+            return self._trip(
+                f"contraction {y:.1f} mm outside {lim.contraction_min_mm}..{lim.contraction_max_mm} mm "
+                "(sensor disconnected or saturated?)"
+            )
+        if math.isfinite(p) and p > lim.pressure_max_bar:
+            return self._trip(f"overpressure {p:.2f} bar > {lim.pressure_max_bar} bar")
+        if self._armed_at is None:
+            self._armed_at = t
+        command = self.controller.tick(t, dt, readings)
+        if not math.isfinite(command.pressure_bar):
+            return self._trip("control output is not finite")
+        settled = t - self._armed_at >= lim.tracking_grace_s
+        if settled and abs(command.reference_mm - y) > lim.tracking_error_max_mm:
+            return self._trip(f"tracking error {abs(command.reference_mm - y):.1f} mm > {lim.tracking_error_max_mm} mm")
+        self.state = State.RUNNING
+        self._last_pressure = command.pressure_bar
+        return Outcome(command.pressure_bar, True, self.state, None, command)
