@@ -116,8 +116,8 @@ class DaqServer:
         )
         payload = SAMPLE_FORMAT.pack(
             int(round(t * 1e6)) & 0xFFFFFFFF,
-            daq_code(rig._analog(PRESSURE_CHANNEL)),
-            daq_code(rig._analog(DISPLACEMENT_CHANNEL)),
+            daq_code(rig.analog_volts(PRESSURE_CHANNEL)),
+            daq_code(rig.analog_volts(DISPLACEMENT_CHANNEL)),
             status,
         )
         frame = encode_frame(self._sequence, FrameType.SAMPLE, payload)

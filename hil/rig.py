@@ -87,7 +87,7 @@ class HilRig:
         self.faults = RigFaults()
         advance = self.clock.advance if isinstance(self.clock, SimClock) else None
         self.bus = EmulatedI2CBus(advance=advance, before_transfer=self.sync)
-        self.adc = ADS1x15Emulator(self.clock.now, self._analog, adc_variant, vdd=ADC_VDD)
+        self.adc = ADS1x15Emulator(self.clock.now, self.analog_volts, adc_variant, vdd=ADC_VDD)
         self.dac = MCP4725Emulator(self.clock.now)
         self.bus.attach(ADC_ADDRESS, self.adc)
         self.bus.attach(DAC_ADDRESS, self.dac)
@@ -118,7 +118,8 @@ class HilRig:
         self.sync()
         return output(self._plant_time, self.state, self.params)
 
-    def _analog(self, channel: int) -> float:
+    def analog_volts(self, channel: int) -> float:
+        """What the ADC input pin of ``channel`` sees now [V], sensor faults included."""
         mode = self.faults.sensors.get(channel)
         if mode == "stuck":
             return self.faults.stuck_volts.setdefault(channel, self._sensor_volts(channel))

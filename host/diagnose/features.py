@@ -36,19 +36,21 @@ def smoothed_rate(u: NDArray[np.float64], dt: float, window_s: float = 0.05) -> 
     return np.convolve(rate, kernel, mode="same")
 
 
-def slow_part(x: NDArray[np.float64], dt: float, tau_s: float) -> NDArray[np.float64]:
-    """``lowpass(x, tau) - x``: what a first-order creep element with time constant ``tau`` adds."""
-    alpha = 1.0 - np.exp(-dt / tau_s)
-    low = lfilter([alpha], [1.0, alpha - 1.0], x, zi=[x[0] * (1 - alpha)])[0]
-    return low - x
-
-
 def first_order(u: NDArray[np.float64], dt: float, tau_s: float) -> NDArray[np.float64]:
-    """``u`` through a unit-gain first-order lag of ``tau_s`` (0: unchanged), starting settled."""
+    """``u`` through a unit-gain first-order lag of ``tau_s`` (0: unchanged), starting settled.
+
+    Filters along the first axis, so a 2-D array is filtered column by column.
+    """
     if tau_s <= 0:
         return u
     alpha = 1.0 - np.exp(-dt / tau_s)
-    return lfilter([alpha], [1.0, alpha - 1.0], u, zi=[u[0] * (1 - alpha)])[0]
+    return lfilter([alpha], [1.0, alpha - 1.0], u, axis=0, zi=u[:1] * (1 - alpha))[0]
+
+
+def slow_part(x: NDArray[np.float64], dt: float, tau_s: float) -> NDArray[np.float64]:
+    """``lowpass(x, tau) - x``: what a first-order creep element with time constant ``tau`` adds
+    (column by column for a 2-D array)."""
+    return first_order(x, dt, tau_s) - x
 
 
 def branch_offset(u: NDArray[np.float64], start: MemoryStart, share: float = 0.1) -> NDArray[np.float64]:

@@ -108,7 +108,7 @@ def fit_hammerstein(
     x = fit_static(rows, y, train)
     model = arx(x)
     dense = rows.astype(np.float64)
-    creep_rows = slow_part_columns(dense, dt, creep_tau_s) if creep_tau_s is not None else None
+    creep_rows = slow_part(dense, dt, creep_tau_s) if creep_tau_s is not None else None
     for _ in range(iterations):
         b = model.exogenous[: model.nb]
         a = np.r_[1.0, -model.ar]
@@ -134,14 +134,6 @@ def _filter_columns(
         return b[0] / a[0] * columns
     zi = lfilter_zi(b, a)[:, None] * columns[:1]
     return lfilter(b, a, columns, axis=0, zi=zi)[0]
-
-
-def slow_part_columns(columns: NDArray[np.float64], dt: float, tau_s: float) -> NDArray[np.float64]:
-    """:func:`host.diagnose.features.slow_part` applied to every column."""
-    alpha = 1.0 - np.exp(-dt / tau_s)
-    zi = columns[:1] * (1 - alpha)
-    low = lfilter([alpha], [1.0, alpha - 1.0], columns, axis=0, zi=zi)[0]
-    return low - columns
 
 
 def _lagged(signal: NDArray[np.float64], lags: range) -> NDArray[np.float64]:

@@ -55,6 +55,7 @@ class Context:
     start: MemoryStart | None = None
     levels: int = 12
     _rate_rows: dict[tuple[float, float], NDArray[np.float32]] = field(default_factory=dict)
+    _rate_inputs: dict[float, tuple[NDArray[np.float64], NDArray[np.float64]]] = field(default_factory=dict)
 
     def rate_rows(self, widening: float) -> NDArray[np.float32]:
         """Preisach rows of the hysteresis with rate-dependent thresholds (seed 001 / Ang).
@@ -69,10 +70,12 @@ class Context:
         """
         key = (self.lag_s, widening)
         if key not in self._rate_rows:
-            lagged = first_order(self.full_u, self.dt, self.lag_s)
-            rate = np.abs(smoothed_rate(lagged, self.dt))
-            scale = float(np.percentile(rate, 95)) or 1.0
-            effective = rate_play(lagged, widening * float(np.ptp(lagged)) * (rate / scale) ** 2)
+            if self.lag_s not in self._rate_inputs:  # the lagged input and its rate, once per lag
+                lagged = first_order(self.full_u, self.dt, self.lag_s)
+                rate = np.abs(smoothed_rate(lagged, self.dt))
+                self._rate_inputs[self.lag_s] = (lagged, rate / (float(np.percentile(rate, 95)) or 1.0))
+            lagged, relative_rate = self._rate_inputs[self.lag_s]
+            effective = rate_play(lagged, widening * float(np.ptp(lagged)) * relative_rate**2)
             assert self.start is not None
             self._rate_rows[key] = preisach_rows(effective, self.start, self.levels)
         return self._rate_rows[key]
@@ -110,7 +113,6 @@ def centred(values: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np
 def extension(ctx: Context, cause: str) -> FittedModel | None:
     """The model with ``cause``'s term, or None when the data cannot show it (column missing)."""
     x = ctx.x
-    xc = centred(x, ctx.train)
     if cause == "rate_dependence":  # rate-dependent thresholds (seed 001 / Ang), dynamics refitted
         return _best_of(ctx, "threshold_widening_at_rate95", RATE_WIDENINGS, _refit_on(ctx, cause, ctx.rate_rows))
     if cause == "creep":  # a creep operator: first-order relaxation of the hysteresis output
@@ -137,6 +139,7 @@ def extension(ctx: Context, cause: str) -> FittedModel | None:
         return None
     v = centred(values, ctx.train)
     v /= float(np.std(v[ctx.train])) or 1.0
+    xc = centred(x, ctx.train)
     xn = xc / (float(np.std(xc[ctx.train])) or 1.0)
     # the static curve can shift and bend (v, v x, v x^2) and the loop can widen or narrow:
     # v * branch, where branch is a play operator's offset (which branch the memory is on)
