@@ -25,3 +25,7 @@ class BundleError(PmactlError, ValueError):
 
 class BusError(PmactlError, OSError):
     """A transfer on a hardware bus failed (NACK, I/O error, timeout, corrupt frame)."""
+
+
+class ConfigError(PmactlError, ValueError):
+    """A rig configuration that cannot be run (unknown key, missing calibration, impossible rate)."""

@@ -70,6 +70,7 @@ class HilRig:
         clock: defaults to a new :class:`SimClock` (lockstep).
         seed: sensor noise.
         adc_variant: ``ADS1115`` or ``ADS1015``.
+        bus_hz: I2C clock; when given, lockstep runs pay each transfer's wire time.
     """
 
     def __init__(
@@ -78,6 +79,7 @@ class HilRig:
         clock: Clock | None = None,
         seed: int = 0,
         adc_variant: str = "ADS1115",
+        bus_hz: float | None = None,
     ) -> None:
         self.params = params or PlantParams()
         self.clock = clock or SimClock()
@@ -86,7 +88,7 @@ class HilRig:
         self._plant_time = self.clock.now()
         self.faults = RigFaults()
         advance = self.clock.advance if isinstance(self.clock, SimClock) else None
-        self.bus = EmulatedI2CBus(advance=advance, before_transfer=self.sync)
+        self.bus = EmulatedI2CBus(advance=advance, before_transfer=self.sync, bus_hz=bus_hz)
         self.adc = ADS1x15Emulator(self.clock.now, self.analog_volts, adc_variant, vdd=ADC_VDD)
         self.dac = MCP4725Emulator(self.clock.now)
         self.bus.attach(ADC_ADDRESS, self.adc)

@@ -11,7 +11,7 @@ import errno
 
 from edge.errors import BusError
 from edge.hal.clock import Clock
-from edge.hal.i2c import I2CBus, I2CMessage
+from edge.hal.i2c import I2CBus, I2CMessage, transfer_bits
 
 FULL_SCALE_V = {6.144: 0, 4.096: 1, 2.048: 2, 1.024: 3, 0.512: 4, 0.256: 5}
 DATA_RATES = {
@@ -61,6 +61,13 @@ class ADS1x15:
     @property
     def conversion_time_s(self) -> float:
         return 1.0 / self.data_rate_sps
+
+    @staticmethod
+    def read_bus_bits() -> int:
+        """I2C clocks of one single-shot read: config write, one status poll, result read."""
+        config = [I2CMessage.write([CONFIG, 0, 0])]
+        register_read = [I2CMessage.write([CONFIG]), I2CMessage.read_bytes(2)]
+        return transfer_bits(config) + 2 * transfer_bits(register_read)
 
     def _config(self, channel: int, single_shot: bool) -> int:
         if not 0 <= channel <= 3:

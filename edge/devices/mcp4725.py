@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from edge.hal.i2c import I2CBus, I2CMessage
+from edge.hal.i2c import I2CBus, I2CMessage, transfer_bits
 
 
 class MCP4725:
@@ -17,6 +17,11 @@ class MCP4725:
     def __init__(self, bus: I2CBus, *, address: int = 0x60, vdd: float = 5.0) -> None:
         self._bus, self.address, self.vdd = bus, address, vdd
         self._message = I2CMessage.write([0, 0])
+
+    @staticmethod
+    def write_bus_bits() -> int:
+        """I2C clocks of one fast-mode write."""
+        return transfer_bits([I2CMessage.write([0, 0])])
 
     def write_code(self, code: int) -> None:
         """Fast-mode write of a 12-bit code (0..4095), output enabled."""

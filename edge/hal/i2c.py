@@ -42,6 +42,15 @@ class I2CBus(Protocol):
         """Release the bus."""
 
 
+BITS_PER_BYTE = 9  # 8 data bits + acknowledge
+START_STOP_BITS = 2
+
+
+def transfer_bits(messages: Sequence[I2CMessage]) -> int:
+    """Clock cycles of one transfer: each message is an address byte plus its data bytes."""
+    return sum(1 + len(m.data) for m in messages) * BITS_PER_BYTE + START_STOP_BITS
+
+
 def check_address(address: int) -> None:
     """7-bit addresses only; the reserved ranges are refused."""
     if not 0x08 <= address <= 0x77:

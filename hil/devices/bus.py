@@ -3,7 +3,8 @@
 Devices attach at an address and see the bytes exactly as a real chip would: each write
 message's payload, and read requests of a given length. Faults (pymodbus's manipulator idea):
 NACK and EIO bursts for the next N transfers (optionally for one address only) and an added
-latency per transfer, which a simulated clock lets pass.
+latency per transfer, which a simulated clock lets pass. With ``bus_hz`` the wire time of every
+transfer (9 clocks per byte) passes too, so a lockstep run pays for the bus as a real one does.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 from edge.errors import BusError
-from edge.hal.i2c import I2CMessage, check_address
+from edge.hal.i2c import I2CMessage, check_address, transfer_bits
 
 
 class I2CDevice(Protocol):
@@ -46,6 +47,7 @@ class EmulatedI2CBus:
     Args:
         advance: called with the latency of each transfer (a simulated clock's ``advance``).
         before_transfer: called before each transfer (the rig brings its physics up to date).
+        bus_hz: SCL frequency; when given, each transfer's wire time is passed to ``advance``.
     """
 
     def __init__(
@@ -53,12 +55,14 @@ class EmulatedI2CBus:
         advance: Callable[[float], None] | None = None,
         before_transfer: Callable[[], None] | None = None,
         faults: WireFaults | None = None,
+        bus_hz: float | None = None,
     ) -> None:
         self.devices: dict[int, I2CDevice] = {}
         self.faults = faults or WireFaults()
         self.transfers = 0
         self._advance = advance
         self._before = before_transfer
+        self.bus_hz = bus_hz
 
     def attach(self, address: int, device: I2CDevice) -> None:
         check_address(address)
@@ -68,8 +72,10 @@ class EmulatedI2CBus:
         check_address(address)
         self.transfers += 1
         faults = self.faults
-        if faults.latency_s and self._advance is not None:
-            self._advance(faults.latency_s)
+        if self._advance is not None:
+            wire_s = transfer_bits(messages) / self.bus_hz if self.bus_hz else 0.0
+            if faults.latency_s or wire_s:
+                self._advance(faults.latency_s + wire_s)
         targeted = faults.only_address in (None, address)
         if faults.nack_remaining and targeted:
             faults.nack_remaining -= 1
