@@ -3,8 +3,10 @@
 The DAQ samples the pressure and displacement sensors with its own 16-bit converter (codes:
 ``round(volts / 4.096 * 32768)``, saturating) at the configured rate, streams SAMPLE frames,
 and applies COMMAND frames (DAC code and valve enable) and CONFIG frames (sample rate) as they
-arrive. ``open_pty()`` gives a master descriptor for the server and the slave path the edge
-opens with pyserial, exactly as it would open ``/dev/ttyUSB0``.
+arrive. Like DAQ firmware, it vents the valve by itself when no COMMAND frame came for
+``command_timeout_s`` (the host died or the cable came out). ``open_pty()`` gives a master
+descriptor for the server and the slave path the edge opens with pyserial, exactly as it would
+open ``/dev/ttyUSB0``.
 
 Faults on the wire (:class:`SerialFaults`): corrupt a byte of the next N frames, drop the next
 N frames, hold frames back by a delay.
@@ -58,8 +60,11 @@ def daq_code(volts: float) -> int:
 class DaqServer:
     """Serves the DAQ protocol for ``rig`` on descriptor ``fd`` (call :meth:`service` often)."""
 
-    def __init__(self, rig: HilRig, fd: int, rate_hz: float = 1000.0) -> None:
+    def __init__(self, rig: HilRig, fd: int, rate_hz: float = 1000.0, command_timeout_s: float = 0.1) -> None:
         self.rig = rig
+        self.command_timeout_s = command_timeout_s
+        self._last_command = rig.clock.now()
+        self.command_timeouts = 0
         self.fd = fd
         self.rate_hz = rate_hz
         self.faults = SerialFaults()
@@ -75,6 +80,10 @@ class DaqServer:
         """Apply received commands, then send every sample that has come due."""
         self._receive()
         now = self.rig.clock.now()
+        if self.rig.gpio.get("valve_enable") and now - self._last_command > self.command_timeout_s:
+            self.rig.sync()
+            self.rig.gpio.set("valve_enable", False)
+            self.command_timeouts += 1
         while self._next_sample <= now:
             self._queue(self._sample_frame(self._next_sample))
             self._next_sample += 1.0 / self.rate_hz
@@ -104,6 +113,7 @@ class DaqServer:
                 rig.dac.code, rig.dac.power_down = min(code, 4095), 0
             rig.gpio.set("valve_enable", bool(flags & FLAG_VALVE_ENABLE))
             self.commands += 1
+            self._last_command = rig.clock.now()
         elif frame_type == FrameType.CONFIG and len(payload) == CONFIG_FORMAT.size:
             (rate,) = CONFIG_FORMAT.unpack(payload)
             if rate:

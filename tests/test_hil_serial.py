@@ -61,6 +61,7 @@ def run(rig, server, port, seconds, decoder):
 
 def test_command_and_samples_round_trip_over_a_pty(lockstep_daq):
     rig, server, port = lockstep_daq
+    server.command_timeout_s = 10.0  # one command, held for a second
     decoder = FrameDecoder()
     port.write(encode_frame(1, FrameType.COMMAND, COMMAND_FORMAT.pack(round(3.0 / 10.0 * 4096), FLAG_VALVE_ENABLE)))
     port.flush()
@@ -73,6 +74,16 @@ def test_command_and_samples_round_trip_over_a_pty(lockstep_daq):
     pressure = (pressure_code / 32768 * 4.096 - 0.5) / 0.4
     assert pressure == pytest.approx(3.0, abs=0.05) and status & 0x02
     assert server.commands == 1
+
+
+def test_the_daq_vents_by_itself_when_commands_stop(lockstep_daq):
+    rig, server, port = lockstep_daq
+    port.write(encode_frame(1, FrameType.COMMAND, COMMAND_FORMAT.pack(2000, FLAG_VALVE_ENABLE)))
+    port.flush()
+    run(rig, server, port, 0.05, FrameDecoder())
+    assert rig.gpio.get("valve_enable")
+    run(rig, server, port, server.command_timeout_s, FrameDecoder())
+    assert not rig.gpio.get("valve_enable") and server.command_timeouts == 1
 
 
 def test_serial_faults_are_visible_at_the_wire(lockstep_daq):
