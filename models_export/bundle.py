@@ -5,6 +5,7 @@ Layout of a bundle directory::
     manifest.json   format, version, model kind, units, ranges, files with sha256, fit record
     forward.npz     lookup table of the identified model (input u -> output y)
     inverse.npz     lookup table of its inverse (desired y -> input u), clamped and flagged
+    correction.onnx optional neural correction of the feedforward (``add_correction``)
 
 The directory is written next to its destination and swapped in only when complete, so a
 failed write leaves an existing bundle untouched.
@@ -24,6 +25,8 @@ from edge import __version__
 from edge.hysteresis.base import HysteresisModel
 from edge.hysteresis.lut import write_table
 from edge.runtime.bundle import FORMAT, FORMAT_VERSION, MANIFEST
+
+CORRECTION_FILE = "correction.onnx"
 
 
 def sha256_of(path: Path) -> str:
@@ -70,6 +73,32 @@ def write_bundle(
             "files": files,
             "fit": fit_record or {},
         }
+        (staging / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
+        _swap_in(staging, target)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    return target
+
+
+def add_correction(directory: str | Path, model_path: str | Path, spec: dict[str, object]) -> Path:
+    """Add (or replace) the ONNX correction of the bundle at ``directory``.
+
+    ``spec`` is the manifest's ``correction`` entry without ``file`` (features, input, output,
+    optional state; see :mod:`edge.control.neural`). The bundle is rewritten beside the old one
+    and swapped in, so a failure leaves the old bundle as it was.
+    """
+    target = Path(directory)
+    manifest = json.loads((target / MANIFEST).read_text())
+    staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
+    try:
+        files = {name: entry for name, entry in manifest["files"].items() if entry.get("role") != "correction"}
+        for name in files:
+            shutil.copy2(target / name, staging / name)
+        shutil.copy2(model_path, staging / CORRECTION_FILE)
+        files[CORRECTION_FILE] = {"role": "correction", "kind": "onnx", "sha256": sha256_of(staging / CORRECTION_FILE)}
+        manifest["files"] = files
+        manifest["correction"] = {"file": CORRECTION_FILE, **spec}
         (staging / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
         _swap_in(staging, target)
     except BaseException:

@@ -1,0 +1,40 @@
+"""Shared set-up for the edge runtime tests: the example rig config and a fitted bundle."""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from pathlib import Path
+
+from edge.control.reference import parse_reference
+from edge.runtime.bundle import load_bundle
+from edge.runtime.config import RigConfig, config_from_dict
+from edge.runtime.run import EdgeRuntime
+from host.data import load_measurement
+from host.examples import example_path
+from host.workflow import make_estimator, save_bundle
+
+REPO = Path(__file__).resolve().parents[1]
+HIL_RIG = REPO / "docs" / "examples" / "hil-rig.toml"
+SEED_000_SINE = "sine:amplitude=30,frequency=0.2,offset=40"
+
+
+def rig_config(**sections: dict) -> RigConfig:
+    """docs/examples/hil-rig.toml with ``sections`` merged in (e.g. loop={"rate_hz": 200})."""
+    raw = tomllib.loads(HIL_RIG.read_text())
+    raw = copy.deepcopy(raw)
+    for name, values in sections.items():
+        raw.setdefault(name, {}).update(values)
+    return config_from_dict(raw, str(HIL_RIG))
+
+
+def fit_bundle(directory: Path, model: str = "preisach") -> Path:
+    """What ``pmactl fit --model preisach --train pma_triangles.csv --units bar,mm --save`` writes."""
+    train = load_measurement(example_path("train"))
+    estimator = make_estimator(model).fit(train.u, train.y)
+    return save_bundle(estimator, train, directory, ("bar", "mm"), {"model": model})
+
+
+def runtime(bundle_dir: Path | None, reference: str = SEED_000_SINE, config: RigConfig | None = None, **kwargs):
+    bundle = load_bundle(bundle_dir) if bundle_dir is not None else None
+    return EdgeRuntime(config or rig_config(), bundle, parse_reference(reference), **kwargs)
