@@ -15,7 +15,7 @@ from host.examples import example_path
 from host.workflow import make_estimator, save_bundle
 
 REPO = Path(__file__).resolve().parents[1]
-HIL_RIG = REPO / "docs" / "examples" / "hil-rig.toml"
+HIL_RIG = REPO / "docs" / "examples" / "hil-rig.toml"  # a link to hil/configs/hil-rig.toml
 SEED_000_SINE = "sine:amplitude=30,frequency=0.2,offset=40"
 
 

@@ -98,3 +98,5 @@ def test_demo_runs_the_whole_path(tmp_path, capsys):
         assert row["inverse_round_trip_bar"] < 1e-6
     assert models["preisach"]["rmse_pct_pp"] < 3.0  # the shipped muscle data is well inside reach
     assert models["mpi"]["rmse_pct_pp"] < models["pi"]["rmse_pct_pp"]
+    pid, with_ff = report["closed_loop"]
+    assert pid["faults"] == [] == with_ff["faults"] and with_ff["rms_error"] <= 0.5 * pid["rms_error"]

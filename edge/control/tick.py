@@ -18,7 +18,7 @@ from edge.control.pid import PID, PIDGains
 from edge.hysteresis.lut import CompiledModel
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)  # built every tick: slots, not frozen (a frozen init costs ~0.15 us per field)
 class Readings:
     """Sensor values of one tick: contraction [mm], pressure [bar]."""
 
@@ -26,7 +26,7 @@ class Readings:
     pressure_bar: float = float("nan")
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)  # built every tick: slots, not frozen (a frozen init costs ~0.15 us per field)
 class Command:
     """What to send this tick, and why (for telemetry)."""
 

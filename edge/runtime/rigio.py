@@ -20,7 +20,7 @@ from edge.hal.serial import SerialLink
 from edge.runtime.config import RigConfig
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)  # built every tick: slots, not frozen (a frozen init costs ~0.15 us per field)
 class RigReading:
     """One tick's sensors: contraction [mm], pressure [bar] (NaN without a transducer), e-stop."""
 

@@ -56,7 +56,7 @@ class SafetyLimits:
     stuck_command_span_bar: float = 0.5
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)  # built every tick: slots, not frozen (a frozen init costs ~0.15 us per field)
 class Health:
     """What the runtime learned about this tick apart from the readings."""
 
@@ -65,7 +65,10 @@ class Health:
     estop: bool = False
 
 
-@dataclass
+HEALTHY = Health()
+
+
+@dataclass(slots=True)  # built every tick: slots, not frozen (a frozen init costs ~0.15 us per field)
 class Outcome:
     """The tick's decision: what to command, whether the valve stays enabled, the state."""
 
@@ -148,8 +151,9 @@ class Supervisor:
         """A fault found outside the tick (the runtime's watchdog): vent and latch."""
         return self._trip(kind, reason)
 
-    def tick(self, t: float, dt: float, readings: Readings | None, health: Health = Health()) -> Outcome:
+    def tick(self, t: float, dt: float, readings: Readings | None, health: Health | None = None) -> Outcome:
         """One tick: ``readings`` is None when the sensors could not be read this tick."""
+        health = health or HEALTHY
         if self.state in (State.CONFIGURED, State.SAFE):
             return Outcome(VENT, False, self.state, self.fault, None, self.fault_kind)
         lim = self.limits

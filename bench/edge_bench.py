@@ -1,0 +1,188 @@
+"""Benchmark of the edge loop: per-tick compute inside the running loop, real-time lateness.
+
+Usage: python bench/edge_bench.py [--seconds 60] [--skip-realtime]
+
+1. Per-tick breakdown (median / p99 us) of a 20 s lockstep run on the HIL at 1 kHz with a
+   Preisach lookup-table inverse and a 2-5-10-1 ONNX correction (seed 000's BP net shape):
+   read, inverse, NN, PID, limits + safety, write, log. read and write run the emulated chips
+   and integrate the plant inside the bus transfers, so they overstate a real bus's CPU cost.
+2. Lateness of a real-time 1 kHz run (``--seconds``) over the serial DAQ protocol on a pty, the
+   HIL in its own process (``pmactl hil serve``): median, p99, p99.9, max, overruns per 1e4
+   ticks, with and without SCHED_FIFO.
+3. The same schedule in C (bench/c_sleep_loop.c, compiled with cc) for 1e4 ticks, with and
+   without SCHED_FIFO: what this machine allows any program.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from edge.control.reference import parse_reference
+from edge.runtime.bundle import load_bundle
+from edge.runtime.config import config_from_dict
+from edge.runtime.run import PHASES, EdgeRuntime
+from host.data import load_measurement
+from host.examples import example_path
+from host.workflow import make_estimator, save_bundle
+from models_export.bundle import add_correction
+
+HERE = Path(__file__).resolve().parent
+EXAMPLES = HERE.parent / "docs" / "examples"
+sys.path.insert(0, str(HERE.parent))
+from tests.onnx_models import mlp  # noqa: E402  (the test helper builds the ONNX net)
+
+
+class Timed:
+    """Wraps an object's ``step`` and records its duration [ns] per call."""
+
+    def __init__(self, inner: object, n: int) -> None:
+        self._inner, self.ns, self.count = inner, np.zeros(n, dtype=np.int64), 0
+
+    def step(self, *args: object, **kwargs: object) -> float:
+        start = time.perf_counter_ns()
+        value = self._inner.step(*args, **kwargs)  # type: ignore[attr-defined]
+        if self.count < len(self.ns):
+            self.ns[self.count] = time.perf_counter_ns() - start
+        self.count += 1
+        return value
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._inner, name)
+
+
+def make_bundle(root: Path) -> Path:
+    train = load_measurement(example_path("train"))
+    bundle = save_bundle(make_estimator("preisach").fit(train.u, train.y), train, root / "bundle", ("bar", "mm"), {})
+    path, _ = mlp(root / "bp.onnx", scale=0.05)
+    add_correction(
+        bundle, path, {"features": ["reference_mm", "feedforward_bar"], "input": "features", "output": "correction_bar"}
+    )
+    return bundle
+
+
+def load_example(name: str, **changes: dict) -> object:
+    import tomllib
+
+    raw = tomllib.loads((EXAMPLES / name).read_text())
+    for section, values in changes.items():
+        raw.setdefault(section, {}).update(values)
+    return config_from_dict(raw, name)
+
+
+def profiled_run(bundle: Path, seconds: float, timed: bool) -> tuple[EdgeRuntime, dict]:
+    """A lockstep run with per-phase timing; ``timed`` also wraps inverse, NN and PID."""
+    n = int(seconds * 1000)
+    with tempfile.TemporaryDirectory() as tmp:
+        edge = EdgeRuntime(
+            load_example("hil-rig.toml"),
+            load_bundle(bundle),
+            parse_reference("sine:amplitude=30,frequency=0.2,offset=40"),
+            telemetry_path=Path(tmp) / "t.pmt",
+            profile=True,
+        )
+        if timed:
+            controller = edge.controller
+            controller.inverse = Timed(controller.inverse, n)
+            controller.correction = Timed(controller.correction, n)
+            controller.pid = Timed(controller.pid, n)
+        summary = edge.run(seconds).as_dict()
+    return edge, summary
+
+
+def breakdown(bundle: Path, seconds: float = 20.0) -> None:
+    edge, summary = profiled_run(bundle, seconds, timed=True)
+    controller = edge.controller
+    phases = edge.phase_ns[: summary["ticks"]] / 1e3
+    inverse, nn, pid = controller.inverse.ns / 1e3, controller.correction.ns / 1e3, controller.pid.ns / 1e3
+    parts = {
+        "read (emulated chips + plant)": phases[:, PHASES.index("read")],
+        "inverse (lookup table)": inverse,
+        "NN (onnxruntime, 2-5-10-1)": nn,
+        "PID": pid,
+        "limits + safety (+ timer cost)": phases[:, PHASES.index("control")] - inverse - nn - pid,
+        "write (emulated chips + plant)": phases[:, PHASES.index("write")],
+        "log (telemetry row)": phases[:, PHASES.index("log")],
+    }
+    print(f"\nPer-tick breakdown, lockstep HIL, 1 kHz, {summary['ticks']} ticks (us)")
+    print(f"{'phase':<34} {'median':>8} {'p99':>8}")
+    for name, values in parts.items():
+        print(f"{name:<34} {np.median(values):8.2f} {np.percentile(values, 99):8.2f}")
+    edge, summary = profiled_run(bundle, seconds, timed=False)  # the whole tick without the timers
+    phases = edge.phase_ns[: summary["ticks"]] / 1e3
+    compute = phases[:, PHASES.index("control")] + phases[:, PHASES.index("log")]
+    print(f"{'whole tick compute, untimed run':<34} {np.median(compute):8.2f} {np.percentile(compute, 99):8.2f}")
+    print(f"(safety + inverse + NN + PID + limits + log; tracking RMS {summary['rms_error']:.2f} mm, untrained net)")
+
+
+def realtime_run(bundle: Path, seconds: float, fifo: bool) -> dict:
+    server = subprocess.Popen([sys.executable, "-m", "host.cli", "hil", "serve"], stdout=subprocess.PIPE, text=True)
+    try:
+        pty = server.stdout.readline().split()[1]
+        config = load_example("hil-serial.toml", rig={"io": f"serial://{pty}"}, loop={"realtime": fifo})
+        edge = EdgeRuntime(config, load_bundle(bundle), parse_reference("sine:amplitude=30,frequency=0.2,offset=40"))
+        summary = edge.run(seconds).as_dict()
+    finally:
+        server.send_signal(signal.SIGTERM)
+        server.communicate(timeout=10)
+    return summary
+
+
+def c_loop(fifo: bool, ticks: int = 10_000) -> tuple[int, int] | None:
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        return None
+    binary = Path(tempfile.gettempdir()) / "pmactl_c_sleep_loop"
+    subprocess.run([cc, "-O2", "-o", str(binary), str(HERE / "c_sleep_loop.c")], check=True)
+    out = subprocess.run([str(binary), str(ticks)] + (["fifo"] if fifo else []), capture_output=True, text=True)
+    if out.returncode:
+        return None
+    overruns, worst = out.stdout.split()
+    return int(overruns), int(worst)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=60.0, help="length of each real-time run")
+    parser.add_argument("--skip-realtime", action="store_true")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        bundle = make_bundle(Path(tmp))
+        breakdown(bundle)
+        if args.skip_realtime:
+            return
+        print(f"\nReal-time 1 kHz over the serial DAQ (pty, HIL in another process), {args.seconds:g} s each")
+        header = f"{'run':<26} {'median':>7} {'p99':>7} {'p99.9':>7} {'max':>8} {'overruns':>9} {'per 1e4':>8}"
+        print(header + "   (lateness in us)")
+        for fifo in (False, True):
+            s = realtime_run(bundle, args.seconds, fifo)
+            lat = s["lateness"]
+            name = "Python, SCHED_FIFO" if fifo else "Python, SCHED_OTHER"
+            print(
+                f"{name:<26} {lat['lateness_median_us']:7.0f} {lat['lateness_p99_us']:7.0f} "
+                f"{lat['lateness_p999_us']:7.0f} {lat['lateness_max_us']:8.0f} {lat['overruns']:9d} "
+                f"{lat['overruns_per_10k']:8.2f}   faults {s['faults'] or 'none'}, RMS {s['rms_error']:.2f} mm"
+            )
+            if fifo:
+                print(f"{'':<26} {'; '.join(s['realtime'])}")
+        for fifo in (False, True):
+            result = c_loop(fifo)
+            name = "C, SCHED_FIFO" if fifo else "C, SCHED_OTHER"
+            if result is None:
+                print(f"{name:<26} (no C compiler or SCHED_FIFO refused)")
+            else:
+                print(
+                    f"{name:<26} {'':>7} {'':>7} {'':>7} {result[1]:8d} {result[0]:9d} {result[0]:8.2f}   (1e4 ticks)"
+                )
+
+
+if __name__ == "__main__":
+    main()
