@@ -84,7 +84,11 @@ class RunSummary:
 
 
 class Watchdog:
-    """Vents the valve from its own thread if the loop stops ticking for ``timeout_s``."""
+    """Vents the valve from its own thread if the loop stops ticking for ``timeout_s``.
+
+    The loop may be stalled inside a bus transfer; ``vent`` drops the GPIO enable line first,
+    which does not share that bus.
+    """
 
     def __init__(self, rig: OpenedRig, timeout_s: float) -> None:
         self._rig, self.timeout_s = rig, timeout_s

@@ -17,6 +17,7 @@ from hil.effects import EFFECTS
 from hil.scenarios import SCENARIOS
 
 HOST_ONLY_MODULES = {"scipy", "matplotlib"}
+EDGE_MODULES = {"onnxruntime", "smbus2", "serial", "gpiod"}
 
 
 def _fit(args: argparse.Namespace) -> int:
@@ -174,11 +175,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except PmactlError as exc:
         print(f"pmactl {args.command}: error: {exc}", file=sys.stderr)
     except ModuleNotFoundError as exc:
-        if exc.name not in HOST_ONLY_MODULES:
+        extra = "host" if exc.name in HOST_ONLY_MODULES else "edge" if exc.name in EDGE_MODULES else None
+        if extra is None:
             raise
         print(
-            f"pmactl {args.command}: error: needs the host extra ({exc.name} is not installed); "
-            "install it with: pip install 'pmactl[host]'",
+            f"pmactl {args.command}: error: needs the {extra} extra ({exc.name} is not installed); "
+            f"install it with: pip install 'pmactl[{extra}]'",
             file=sys.stderr,
         )
     except KeyboardInterrupt:
