@@ -1,12 +1,14 @@
 """The diagnosis: baseline vs physically motivated extensions on blocked held-out data.
 
-1. The record is cut into ``folds`` contiguous blocks after the first sample where the memory is
-   known. For each fold the models are fitted on the other blocks' rows and scored (RMSE) on
-   the held-out block.
+1. The record after the first sample where the memory is known is cut into
+   ``folds * blocks_per_fold`` contiguous blocks, dealt to the folds in turn
+   (:func:`holdout_masks`). For each fold the models are fitted on the other folds' rows and
+   scored (RMSE) on the fold's blocks.
 2. Each extension adds one physical term (see :data:`CAUSES`); its score is the mean relative
    reduction of held-out RMSE against the baseline over the folds.
-3. The cause is the best extension if its mean gain is at least ``min_gain`` *and* it helps on
-   every fold; otherwise ``none``, with the reason.
+3. The cause is the best extension if its mean gain is at least ``min_gain``, it gains at least
+   ``min_gain / 2`` on half of the folds or more (one lucky fold is not evidence), and it costs
+   no more than :data:`FOLD_TOLERANCE` on any fold; otherwise ``none``, with the reason.
 """
 
 from __future__ import annotations
@@ -34,6 +36,10 @@ ACTUATOR_LAGS_S = (0.0, 0.015, 0.03, 0.05)
 DELAYS_S = (0.02, 0.04, 0.07, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5)
 RATE_WIDENINGS = (0.005, 0.01, 0.02, 0.035, 0.05, 0.08, 0.12)  # share of the input range at the 95th-percentile rate
 MIN_SAMPLES = 400
+BLOCKS_PER_FOLD = 3
+# a fold whose blocks hold little of an effect's excitation (slow triangles for a dead time)
+# gains ~0; an extension may not cost more than this on any fold
+FOLD_TOLERANCE = 0.02
 
 
 @dataclass
@@ -232,17 +238,30 @@ def fit_baseline(ctx: Context) -> FittedModel:
     return model
 
 
-def diagnose(m: Measurement, *, folds: int = 4, min_gain: float = 0.05, levels: int = 12) -> Diagnosis:
+def holdout_masks(n: int, folds: int, blocks_per_fold: int, dt: float) -> list[NDArray[np.bool_]]:
+    """Held-out rows of each fold: ``folds * blocks_per_fold`` contiguous blocks in time, block
+    ``j`` held out in fold ``j % folds``. Several blocks per fold spread each fold over the
+    record, so no fold asks the models to extrapolate to conditions (a load level, a
+    temperature, a kind of excitation) that only one stretch of the record has."""
+    blocks = folds * blocks_per_fold
+    edges = np.linspace(0, n, blocks + 1).astype(int)
+    masks = [np.zeros(n, dtype=bool) for _ in range(folds)]
+    for j in range(blocks):
+        masks[j % folds][edges[j] : edges[j + 1]] = True
+    return masks
+
+
+def diagnose(
+    m: Measurement, *, folds: int = 4, blocks_per_fold: int = BLOCKS_PER_FOLD, min_gain: float = 0.05, levels: int = 12
+) -> Diagnosis:
     """Run the diagnosis (see module docstring)."""
     ctx, start_index = prepare(m, levels)
     n = ctx.y.size
-    edges = np.linspace(0, n, folds + 1).astype(int)
+    masks = holdout_masks(n, folds, blocks_per_fold, ctx.dt)
     fold_gains: dict[str, list[float]] = {c: [] for c in CAUSES}
     base_scores: list[float] = []
     ext_scores: dict[str, list[float]] = {c: [] for c in CAUSES}
-    for k in range(folds):
-        held = np.zeros(n, dtype=bool)
-        held[edges[k] : edges[k + 1]] = True
+    for held in masks:
         ctx.train = ~held
         baseline = fit_baseline(ctx)
         base_rmse = rmse(baseline.prediction[held], ctx.y[held])
@@ -253,18 +272,25 @@ def diagnose(m: Measurement, *, folds: int = 4, min_gain: float = 0.05, levels: 
             ext_scores[cause].append(ext_rmse)
             fold_gains[cause].append(1.0 - ext_rmse / base_rmse)
     scores = {c: float(np.mean(g)) for c, g in fold_gains.items()}
-    passing = [c for c in CAUSES if scores[c] >= min_gain and min(fold_gains[c]) > 0.0]
+
+    def holds_up(cause: str) -> bool:
+        gains = fold_gains[cause]
+        helped = sum(g >= min_gain / 2 for g in gains)
+        return min(gains) > -FOLD_TOLERANCE and helped >= len(gains) / 2
+
+    passing = [c for c in CAUSES if scores[c] >= min_gain and holds_up(c)]
     observed = [c for c in passing if c in OBSERVED_CAUSES]
     # an extension built on a measured variable names an observed cause; the flexible dynamic
     # extensions (creep, rate, delay) can mimic a drift of any origin, so they come second
     pool = observed or passing or list(CAUSES)
     best = max(pool, key=lambda c: scores[c])
-    consistent = min(fold_gains[best]) > 0.0
+    consistent = holds_up(best)
     if scores[best] >= min_gain and consistent:
         cause = best
         reason = (
-            f"{best} lowers held-out RMSE by {scores[best]:.0%} on average and on every one of the "
-            f"{folds} folds (next best: {_runner_up(scores, best)})"
+            f"{best} lowers held-out RMSE by {scores[best]:.0%} on average, by at least {min_gain / 2:.1%} on "
+            f"half the folds or more, and costs no more than {FOLD_TOLERANCE:.0%} on any (fold gains "
+            f"{', '.join(f'{g:.1%}' for g in fold_gains[best])}; next best: {_runner_up(scores, best)})"
         )
         rival = max((c for c in DYNAMIC_RIVALS.get(best, ()) if c in scores), key=scores.get, default=None)
         if rival is not None and scores[best] - scores[rival] < 0.02:
@@ -277,7 +303,8 @@ def diagnose(m: Measurement, *, folds: int = 4, min_gain: float = 0.05, levels: 
         why = (
             f"the best extension ({best}) gains {scores[best]:.1%} on held-out data, below the {min_gain:.0%} needed"
             if scores[best] < min_gain
-            else f"the best extension ({best}) gains {scores[best]:.1%} on average but not on every fold "
+            else f"the best extension ({best}) gains {scores[best]:.1%} on average, but it loses more than "
+            f"{FOLD_TOLERANCE:.0%} on a fold or helps on fewer than half of them "
             f"(fold gains {', '.join(f'{g:.1%}' for g in fold_gains[best])})"
         )
         reason = f"no extension improves held-out error meaningfully: {why}"
@@ -303,9 +330,10 @@ def diagnose(m: Measurement, *, folds: int = 4, min_gain: float = 0.05, levels: 
         extended_rmse=extended_rmse,
         gain=float(max(0.0, 1.0 - extended_rmse / baseline_rmse)) if cause != "none" else 0.0,
         holdout=(
-            f"{folds} contiguous blocks in time after sample {start_index} (where the hysteresis memory is "
-            f"known); each block held out in turn, models fitted on the other {folds - 1}; RMSE averaged "
-            "over the held-out blocks"
+            f"{folds * blocks_per_fold} contiguous blocks in time after sample {start_index} (where the "
+            f"hysteresis memory is known), dealt to {folds} folds in turn ({blocks_per_fold} blocks of "
+            f"{n * ctx.dt / (folds * blocks_per_fold):.0f} s each); each fold held out once, models fitted on "
+            "the other folds' blocks and simulated over the whole record; RMSE averaged over the folds"
         ),
         extended_model=_describe(extended_full, ctx) if extended_full else {"name": "baseline (no extension)"},
         reason=reason,
