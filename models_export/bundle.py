@@ -19,6 +19,8 @@ import json
 import math
 import shutil
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from edge import __version__
@@ -42,6 +44,20 @@ def _json_range(values: tuple[float, float]) -> list[float | None]:
     return [v if math.isfinite(v) else None for v in values]
 
 
+@contextmanager
+def _staged(target: Path) -> Iterator[Path]:
+    """A fresh directory beside ``target``, swapped in for it when the block completes and
+    removed if it raises: a failed write never touches the existing bundle."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
+    try:
+        yield staging
+        _swap_in(staging, target)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+
+
 def write_bundle(
     directory: str | Path,
     forward: HysteresisModel,
@@ -52,9 +68,7 @@ def write_bundle(
 ) -> Path:
     """Write ``forward`` and ``inverse`` (in their current states) as a bundle at ``directory``."""
     target = Path(directory)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
-    try:
+    with _staged(target) as staging:
         files = {}
         for role, model in (("forward", forward), ("inverse", inverse)):
             path = write_table(model.compile(), staging / f"{role}.npz")
@@ -74,10 +88,6 @@ def write_bundle(
             "fit": fit_record or {},
         }
         (staging / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
-        _swap_in(staging, target)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
     return target
 
 
@@ -90,8 +100,7 @@ def add_correction(directory: str | Path, model_path: str | Path, spec: dict[str
     """
     target = Path(directory)
     manifest = json.loads((target / MANIFEST).read_text())
-    staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
-    try:
+    with _staged(target) as staging:
         files = {name: entry for name, entry in manifest["files"].items() if entry.get("role") != "correction"}
         for name in files:
             shutil.copy2(target / name, staging / name)
@@ -100,10 +109,6 @@ def add_correction(directory: str | Path, model_path: str | Path, spec: dict[str
         manifest["files"] = files
         manifest["correction"] = {"file": CORRECTION_FILE, **spec}
         (staging / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
-        _swap_in(staging, target)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
     return target
 
 

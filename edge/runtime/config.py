@@ -28,6 +28,7 @@ from edge.devices.ads1x15 import DATA_RATES, FULL_SCALE_V, ADS1x15
 from edge.devices.daq_protocol import COMMAND_FORMAT, SAMPLE_FORMAT
 from edge.devices.mcp4725 import MCP4725
 from edge.errors import ConfigError
+from edge.runtime.safety import SafetyLimits
 
 IO_SCHEMES = ("i2c", "serial", "sim")
 GPIO_SCHEMES = ("gpiochip", "sim")
@@ -127,19 +128,6 @@ class ControlSection:
 
 
 @dataclass(frozen=True)
-class SafetySection:
-    contraction_min_mm: float = -9.0
-    contraction_max_mm: float = 145.0
-    pressure_max_bar: float = 6.5
-    tracking_error_max_mm: float = 25.0
-    tracking_grace_s: float = 3.0
-    bus_error_streak: int = 3
-    overrun_streak: int = 5
-    stuck_window_s: float = 0.3
-    stuck_command_span_bar: float = 0.5
-
-
-@dataclass(frozen=True)
 class TelemetrySection:
     ring_ticks: int = 65_536
     flush_interval_s: float = 0.1
@@ -164,7 +152,7 @@ class RigConfig:
     serial: SerialSection = field(default_factory=SerialSection)
     gpio_lines: GpioLinesSection = field(default_factory=GpioLinesSection)
     control: ControlSection = field(default_factory=ControlSection)
-    safety: SafetySection = field(default_factory=SafetySection)
+    safety: SafetyLimits = field(default_factory=SafetyLimits)
     telemetry: TelemetrySection = field(default_factory=TelemetrySection)
     source: str = "<config>"
 

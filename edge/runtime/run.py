@@ -24,7 +24,7 @@ from edge.errors import BusError, ConfigError
 from edge.runtime.backends import OpenedRig, open_rig
 from edge.runtime.bundle import Bundle
 from edge.runtime.config import RigConfig
-from edge.runtime.safety import Fault, Health, SafetyLimits, State, Supervisor
+from edge.runtime.safety import Fault, Health, State, Supervisor
 from edge.runtime.scheduler import RealtimeSettings, TickScheduler, apply_realtime
 from edge.runtime.telemetry import TelemetryWriter
 
@@ -155,21 +155,7 @@ class EdgeRuntime:
             Limits(c.pressure_min_bar, c.pressure_max_bar, c.slew_bar_per_s),
             correction,
         )
-        s = config.safety
-        self.supervisor = Supervisor(
-            self.controller,
-            SafetyLimits(
-                s.contraction_min_mm,
-                s.contraction_max_mm,
-                s.pressure_max_bar,
-                s.tracking_error_max_mm,
-                s.tracking_grace_s,
-                s.bus_error_streak,
-                s.overrun_streak,
-                s.stuck_window_s,
-                s.stuck_command_span_bar,
-            ),
-        )
+        self.supervisor = Supervisor(self.controller, config.safety)
         self.rig = rig or open_rig(config)
         self.telemetry_path = telemetry_path
         self.settle_s = settle_s

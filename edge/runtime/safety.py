@@ -43,7 +43,7 @@ class State(Enum):
 
 @dataclass(frozen=True)
 class SafetyLimits:
-    """Bounds that end a run (units in the names)."""
+    """Bounds that end a run (units in the names); the ``[safety]`` section of the rig config."""
 
     contraction_min_mm: float = -9.0
     contraction_max_mm: float = 145.0
