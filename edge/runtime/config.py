@@ -275,6 +275,11 @@ def _check_values(config: RigConfig) -> None:
         )
     if config.loop.rate_hz <= 0:
         raise ConfigError(f"{src}: [loop] rate_hz = {config.loop.rate_hz} must be positive")
+    if config.loop.watchdog_s < 3 * config.period_s:
+        raise ConfigError(
+            f"{src}: [loop] watchdog_s = {config.loop.watchdog_s} is under 3 periods ({3 * config.period_s:g} s); "
+            "the watchdog would fire on a normal tick"
+        )
     if config.adc.chip not in DATA_RATES:
         raise ConfigError(f"{src}: [adc] chip = {config.adc.chip!r} unknown; use one of {sorted(DATA_RATES)}")
     if config.adc.data_rate_sps not in DATA_RATES[config.adc.chip]:

@@ -3,8 +3,8 @@ or a stop request.
 
 Per tick: wait for the deadline -> read the sensors -> supervisor (safety checks, then the pure
 control tick) -> write the valve -> one telemetry row. I/O and time live here only. A fault
-vents in the same tick and ends the run; every exit path vents the valve, drains telemetry and
-gives the scheduling policy back.
+vents in the same tick and ends the run; every exit path vents the valve, closes the rig,
+drains telemetry and gives the scheduling policy back. A runtime runs once.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -162,7 +163,7 @@ class EdgeRuntime:
         self.profile = profile
         self.phase_ns: np.ndarray | None = None
         self.stop_requested = threading.Event()
-        self.on_tick: list = []  # callables(t) run before each tick's read (tests inject faults here)
+        self.on_tick: list[Callable[[float], None]] = []  # run before each tick's read (tests inject faults)
 
     def _header(self) -> dict[str, object]:
         return {
@@ -215,7 +216,7 @@ class EdgeRuntime:
             scheduler.start()
             bus_errors = self._loop(scheduler, duration, telemetry, watchdog, errors, faults)
         finally:
-            rig.io.vent()
+            rig.io.close()  # vents first
             if watchdog:
                 watchdog.stop()
             if telemetry:
