@@ -89,3 +89,9 @@ def test_pmactl_edge_run_refuses_bad_input_in_one_line(bundle, tmp_path, capsys)
     assert "unknown kind 'square'" in capsys.readouterr().err
     assert main(["edge", "run", "--config", str(HIL_RIG), "--bundle", str(bundle)]) == 2
     assert "endless reference on a lockstep rig never stops; give --duration" in capsys.readouterr().err
+    assert main(["edge", "run", "--config", str(HIL_RIG), "--bundle", str(bundle), "--duration", "-1"]) == 2
+    assert "--duration -1 must be positive" in capsys.readouterr().err
+    (tmp_path / "a_file").write_text("")
+    args = ["edge", "run", "--config", str(HIL_RIG), "--bundle", str(bundle), "--duration", "1"]
+    assert main([*args, "--telemetry", str(tmp_path / "a_file" / "t.pmt")]) == 2
+    assert "cannot write telemetry" in capsys.readouterr().err

@@ -62,7 +62,12 @@ class TelemetryWriter:
         flush_interval_s: float = 0.1,
     ) -> None:
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._file = self.path.open("wb")
+            self._events_file = events_path(self.path).open("w")
+        except OSError as exc:
+            raise DataError(f"{self.path}: cannot write telemetry ({exc.strerror}); choose a writable path") from exc
         self._ring = np.zeros((ring_ticks, len(COLUMNS)), dtype=ROW_DTYPE)
         self._size = ring_ticks
         self._head = 0  # rows the tick has written (monotonic)
@@ -71,10 +76,8 @@ class TelemetryWriter:
         self.written = 0
         self._events: list[str] = []
         self._lock = threading.Lock()  # guards _events only; the ring is single-producer
-        self._file = self.path.open("wb")
         self._file.write(MAGIC + json.dumps({"columns": COLUMNS, "dtype": ROW_DTYPE.str, **header}).encode() + b"\n")
         self._file.flush()
-        self._events_file = events_path(self.path).open("w")
         self._stop = threading.Event()
         self._interval = flush_interval_s
         self._thread = threading.Thread(target=self._run, name="pmactl-telemetry", daemon=True)

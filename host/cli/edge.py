@@ -14,12 +14,15 @@ import sys
 from pathlib import Path
 
 from edge.control.reference import parse_reference
+from edge.errors import DataError
 from edge.runtime.bundle import load_bundle
 from edge.runtime.config import load_config
 from edge.runtime.run import EdgeRuntime
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.duration is not None and args.duration <= 0:
+        raise DataError(f"--duration {args.duration:g} must be positive (seconds)")
     config = load_config(args.config)
     reference = parse_reference(args.reference)
     bundle = load_bundle(args.bundle)
