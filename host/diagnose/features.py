@@ -2,7 +2,7 @@
 
 * Hysteresis: Preisach rows (``y_static = rows @ E + y_min``, see host.identify.preisach) on a
   coarse grid, from the first sample where the memory is known.
-* Rate: the input's rate and its signed square (smoothed central differences) [u units / s].
+* Rate: smoothed central differences [units / s]; a velocity-squared lag element.
 * Creep: the hysteresis output minus its slow first-order low-pass, for a time constant.
 * Load / temperature: the column, centred, and its product with the hysteresis output.
 """
@@ -67,14 +67,21 @@ def branch_offset(u: NDArray[np.float64], start: MemoryStart, share: float = 0.1
     return (play_outputs(u, thresholds, z0)[:, 0] - u) / threshold
 
 
-def rate_play(u: NDArray[np.float64], threshold: NDArray[np.float64]) -> NDArray[np.float64]:
-    """A play operator with a time-varying threshold: ``z = clip(z_prev, u - r, u + r)``."""
-    out = np.empty_like(u)
-    z = float(u[0])
-    for k, (value, r) in enumerate(zip(u.tolist(), threshold.tolist())):
-        if z < value - r:
-            z = value - r
-        elif z > value + r:
-            z = value + r
-        out[k] = z
+def velocity_squared_lag(target: NDArray[np.float64], dt: float, alpha: float) -> NDArray[np.float64]:
+    """The output of an element that trails ``target`` by ``alpha * v * |v|`` (``v`` its own rate):
+    velocity-squared friction between the rate-independent value and what is measured.
+
+    Each step solves ``y_k = target_k - alpha * v_k |v_k|`` with ``v_k = (y_k - y_{k-1}) / dt``
+    exactly (a quadratic in the step), so it is stable for any ``alpha >= 0`` [s^2 / unit].
+    """
+    if alpha <= 0:
+        return target.copy()
+    beta = alpha / dt**2
+    out = np.empty_like(target)
+    y = float(target[0])
+    for k, value in enumerate(target.tolist()):
+        error = value - y
+        step = (-1.0 + (1.0 + 4.0 * beta * abs(error)) ** 0.5) / (2.0 * beta)
+        y += step if error > 0 else -step
+        out[k] = y
     return out

@@ -8,10 +8,11 @@ rows. Hysteresis and dynamics are fitted together by alternation (:func:`fit_ham
 simulated (output error) over the whole record.
 
 Extensions either add exogenous columns to the ARX drive (load and temperature terms), add a
-creep operator inside the alternation, or refit the whole model on other hysteresis rows (a
-dead time: delayed rows; rate-dependent thresholds: rows of a rate-dependent play of the
-input). Every fit sees only the rows marked in ``train``; the memory (input history) is the
-whole record, since the input is known everywhere.
+creep operator inside the alternation, refit the whole model on other hysteresis rows (a dead
+time: delayed rows), or refit it to an equation-error target and pass its output through an
+element (rate-dependent friction: ``host.diagnose.run._rate_model``). Every fit sees only the
+rows marked in ``train``; the memory (input history) is the whole record, since the input is
+known everywhere.
 """
 
 from __future__ import annotations

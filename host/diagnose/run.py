@@ -22,19 +22,21 @@ from numpy.typing import NDArray
 from edge.errors import DataError
 from host.data import Measurement
 from host.diagnose.evidence import baseline_evidence
-from host.diagnose.features import branch_offset, first_order, preisach_rows, rate_play, smoothed_rate
+from host.diagnose.features import branch_offset, first_order, preisach_rows, smoothed_rate, velocity_squared_lag
 from host.diagnose.hammerstein import FittedModel, fit_arx, fit_hammerstein, rmse
-from host.identify.common import MemoryStart, memory_start
+from host.identify.common import memory_start
 
 CAUSES = ("rate_dependence", "creep", "transport_delay", "load_dependence", "temperature_drift")
 OBSERVED_CAUSES = ("load_dependence", "temperature_drift")
-DYNAMIC_RIVALS = {"rate_dependence": ("transport_delay",), "transport_delay": ("rate_dependence",)}
 CREEP_TAUS_S = (2.0, 5.0, 10.0, 20.0, 40.0, 80.0)
 # first-order actuator (valve) lag before the hysteresis, part of the baseline's linear dynamics
 # (seed 004 models a PAM as a first-order lag plus a dead time); valve-sized, not delay-sized
 ACTUATOR_LAGS_S = (0.0, 0.015, 0.03, 0.05)
 DELAYS_S = (0.02, 0.04, 0.07, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5)
-RATE_WIDENINGS = (0.005, 0.01, 0.02, 0.035, 0.05, 0.08, 0.12)  # share of the input range at the 95th-percentile rate
+# velocity-squared friction: the output's deflection at its 95th-percentile speed, as a share of its range
+FRICTION_DEFLECTIONS = (0.0025, 0.005, 0.01, 0.02, 0.04, 0.08, 0.16)
+# rate dependence and a dead time both explain a lag; see diagnose() for how a near tie is read
+RIVAL_MARGIN = 0.05
 MIN_SAMPLES = 400
 BLOCKS_PER_FOLD = 3
 # a fold whose blocks hold little of an effect's excitation (slow triangles for a dead time)
@@ -57,34 +59,7 @@ class Context:
     train: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
     x: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     lag_s: float = 0.0  # the actuator lag of this fold's baseline
-    full_u: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
-    start: MemoryStart | None = None
-    levels: int = 12
-    _rate_rows: dict[tuple[float, float], NDArray[np.float32]] = field(default_factory=dict)
-    _rate_inputs: dict[float, tuple[NDArray[np.float64], NDArray[np.float64]]] = field(default_factory=dict)
-
-    def rate_rows(self, widening: float) -> NDArray[np.float32]:
-        """Preisach rows of the hysteresis with rate-dependent thresholds (seed 001 / Ang).
-
-        A relay at (alpha, beta) switches at ``alpha + w(t)`` rising and ``beta - w(t)`` falling,
-        the widening ``w = share * range * (|du/dt| / rate95)^2`` growing with the square of the
-        input rate (``rate95``: the 95th percentile of |du/dt|). That is the same as feeding the
-        relays the input through a play operator of threshold ``w(t)``: it lags while the input
-        moves fast and catches up as it slows; it never overshoots a reversal. A dead time's lag
-        grows only in proportion to the rate, which is what tells the two apart. Cached per
-        (lag, share).
-        """
-        key = (self.lag_s, widening)
-        if key not in self._rate_rows:
-            if self.lag_s not in self._rate_inputs:  # the lagged input and its rate, once per lag
-                lagged = first_order(self.full_u, self.dt, self.lag_s)
-                rate = np.abs(smoothed_rate(lagged, self.dt))
-                self._rate_inputs[self.lag_s] = (lagged, rate / (float(np.percentile(rate, 95)) or 1.0))
-            lagged, relative_rate = self._rate_inputs[self.lag_s]
-            effective = rate_play(lagged, widening * float(np.ptp(lagged)) * relative_rate**2)
-            assert self.start is not None
-            self._rate_rows[key] = preisach_rows(effective, self.start, self.levels)
-        return self._rate_rows[key]
+    output_rate: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
 
     @property
     def rows(self) -> NDArray[np.float32]:
@@ -116,11 +91,26 @@ def centred(values: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np
     return values - values[train].mean()
 
 
+def _rate_model(ctx: Context, share: float) -> FittedModel:
+    """Rate-dependent friction: what is measured trails the rate-independent model's output by
+    ``alpha * v |v|``, ``v`` the output's speed (friction growing with sliding speed, seed 001's
+    rate input in its physical form). Fitted by equation error: the hysteresis + dynamics are
+    fitted to ``y + alpha v|v|`` with ``v`` from the measured training output; then simulated
+    (output error) through :func:`velocity_squared_lag`, which needs no measured output."""
+    v = ctx.output_rate
+    speed95 = float(np.percentile(np.abs(v[ctx.train]), 95)) or 1.0
+    alpha = share * float(np.ptp(ctx.y[ctx.train])) / speed95**2
+    model, _ = fit_hammerstein("rate_dependence", ctx.rows, ctx.y + alpha * v * np.abs(v), ctx.train, ctx.dt)
+    model.prediction = velocity_squared_lag(model.prediction, ctx.dt, alpha)
+    model.extra["velocity_squared_coefficient_s2_per_unit"] = alpha
+    return model
+
+
 def extension(ctx: Context, cause: str) -> FittedModel | None:
     """The model with ``cause``'s term, or None when the data cannot show it (column missing)."""
     x = ctx.x
-    if cause == "rate_dependence":  # rate-dependent thresholds (seed 001 / Ang), dynamics refitted
-        return _best_of(ctx, "threshold_widening_at_rate95", RATE_WIDENINGS, _refit_on(ctx, cause, ctx.rate_rows))
+    if cause == "rate_dependence":
+        return _best_of(ctx, "deflection_share_at_speed95", FRICTION_DEFLECTIONS, lambda share: _rate_model(ctx, share))
     if cause == "creep":  # a creep operator: first-order relaxation of the hysteresis output
         return _best_of(
             ctx,
@@ -214,9 +204,7 @@ def prepare(m: Measurement, levels: int) -> tuple[Context, int]:
         branch_offset(m.u, start)[sl],
         extras,
         m.dt,
-        full_u=m.u,
-        start=start,
-        levels=levels,
+        output_rate=smoothed_rate(m.y, m.dt)[sl],
     )
     return ctx, start.index
 
@@ -284,6 +272,13 @@ def diagnose(
     # extensions (creep, rate, delay) can mimic a drift of any origin, so they come second
     pool = observed or passing or list(CAUSES)
     best = max(pool, key=lambda c: scores[c])
+    lag_tie = best == "transport_delay" and "rate_dependence" in passing
+    lag_tie = lag_tie and scores["rate_dependence"] >= scores["transport_delay"] - RIVAL_MARGIN
+    if lag_tie:
+        # a dead time reproduces any lag, also a speed-dependent one over moderate speeds; the
+        # velocity-squared lag cannot reproduce a dead time (its lag vanishes as the output
+        # stops, a dead time's does not). When it does about as well, the lag is not a dead time.
+        best = "rate_dependence"
     consistent = holds_up(best)
     if scores[best] >= min_gain and consistent:
         cause = best
@@ -292,11 +287,15 @@ def diagnose(
             f"half the folds or more, and costs no more than {FOLD_TOLERANCE:.0%} on any (fold gains "
             f"{', '.join(f'{g:.1%}' for g in fold_gains[best])}; next best: {_runner_up(scores, best)})"
         )
-        rival = max((c for c in DYNAMIC_RIVALS.get(best, ()) if c in scores), key=scores.get, default=None)
-        if rival is not None and scores[best] - scores[rival] < 0.02:
+        if lag_tie:
             reason += (
-                f"; {rival} is within 2 points: for smooth inputs a rate-proportional loop widening and a "
-                "short dead time look alike, and only holds and reversals tell them apart"
+                f"; transport_delay scores {scores['transport_delay']:.0%}, within {RIVAL_MARGIN:.0%}: a dead time "
+                "mimics any lag, but a velocity-squared lag cannot mimic a dead time, so the lag depends on speed"
+            )
+        elif best == "transport_delay" and "rate_dependence" in passing:
+            reason += (
+                f"; rate_dependence ({scores['rate_dependence']:.0%}) trails by more than {RIVAL_MARGIN:.0%}: the lag "
+                "persists when the output stops, as a dead time's does"
             )
     else:
         cause = "none"
@@ -354,8 +353,8 @@ def _runner_up(scores: dict[str, float], best: str) -> str:
 def _describe(model: FittedModel, ctx: Context) -> dict[str, object]:
     """A readable description of an extended model and its fitted parameters."""
     terms = {
-        "rate_dependence": "rate-dependent thresholds (seed 001 / Ang): relay thresholds widen with the "
-        "square of the input rate",
+        "rate_dependence": "rate-dependent friction (seed 001's rate input in physical form): y trails the "
+        "rate-independent output by alpha * v|v|, v the output's speed",
         "creep": "creep operator: first-order relaxation of the hysteresis output, y gets e*(lowpass(x, tau) - x)",
         "transport_delay": "dead time before the hysteresis: x(k - d)",
         "load_dependence": "load terms after the force models of seeds 000/004: y gets "
