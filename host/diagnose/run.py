@@ -32,6 +32,7 @@ CREEP_TAUS_S = (2.0, 5.0, 10.0, 20.0, 40.0, 80.0)
 # first-order actuator (valve) lag before the hysteresis, part of the baseline's linear dynamics
 # (seed 004 models a PAM as a first-order lag plus a dead time); valve-sized, not delay-sized
 ACTUATOR_LAGS_S = (0.0, 0.015, 0.03, 0.05)
+MIN_DELAY_SAMPLES = 3
 DELAYS_S = (0.02, 0.04, 0.07, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5)
 # velocity-squared friction: the output's deflection at its 95th-percentile speed, as a share of its range
 FRICTION_DEFLECTIONS = (0.0025, 0.005, 0.01, 0.02, 0.04, 0.08, 0.16)
@@ -125,7 +126,9 @@ def extension(ctx: Context, cause: str) -> FittedModel | None:
             return np.concatenate([np.repeat(ctx.rows[:1], steps, axis=0), ctx.rows[:-steps]])
 
         longest = 0.1 * ctx.y.size * ctx.dt  # a shift of at most a tenth of the record
-        delays = [d for d in DELAYS_S if ctx.dt <= d <= longest]
+        # a shift of one or two samples is within what the model's own resolution (Everett grid,
+        # rate smoothing) produces on a plant without any delay; evidence starts at 3 samples
+        delays = [d for d in DELAYS_S if MIN_DELAY_SAMPLES * ctx.dt <= d <= longest]
         if not delays:
             return None
         return _best_of(ctx, "dead_time_s", delays, _refit_on(ctx, cause, delayed_rows))
