@@ -28,16 +28,12 @@ import numpy as np
 
 from edge.control.reference import parse_reference
 from edge.runtime.bundle import load_bundle
-from edge.runtime.config import config_from_dict
 from edge.runtime.run import PHASES, EdgeRuntime
-from host.data import load_measurement
-from host.examples import example_path
-from host.workflow import make_estimator, save_bundle
 from models_export.bundle import add_correction
 
 HERE = Path(__file__).resolve().parent
-EXAMPLES = HERE.parent / "docs" / "examples"
 sys.path.insert(0, str(HERE.parent))
+from tests.edge_helpers import fit_bundle, rig_config  # noqa: E402  (the tests' rig and bundle)
 from tests.onnx_models import mlp  # noqa: E402  (the test helper builds the ONNX net)
 
 
@@ -60,8 +56,8 @@ class Timed:
 
 
 def make_bundle(root: Path) -> Path:
-    train = load_measurement(example_path("train"))
-    bundle = save_bundle(make_estimator("preisach").fit(train.u, train.y), train, root / "bundle", ("bar", "mm"), {})
+    """The Preisach bundle of the tests, with a small 2-5-10-1 net as its correction."""
+    bundle = fit_bundle(root / "bundle")
     path, _ = mlp(root / "bp.onnx", scale=0.05)
     add_correction(
         bundle, path, {"features": ["reference_mm", "feedforward_bar"], "input": "features", "output": "correction_bar"}
@@ -69,21 +65,12 @@ def make_bundle(root: Path) -> Path:
     return bundle
 
 
-def load_example(name: str, **changes: dict) -> object:
-    import tomllib
-
-    raw = tomllib.loads((EXAMPLES / name).read_text())
-    for section, values in changes.items():
-        raw.setdefault(section, {}).update(values)
-    return config_from_dict(raw, name)
-
-
 def profiled_run(bundle: Path, seconds: float, timed: bool) -> tuple[EdgeRuntime, dict]:
     """A lockstep run with per-phase timing; ``timed`` also wraps inverse, NN and PID."""
     n = int(seconds * 1000)
     with tempfile.TemporaryDirectory() as tmp:
         edge = EdgeRuntime(
-            load_example("hil-rig.toml"),
+            rig_config(),
             load_bundle(bundle),
             parse_reference("sine:amplitude=30,frequency=0.2,offset=40"),
             telemetry_path=Path(tmp) / "t.pmt",
@@ -127,7 +114,7 @@ def realtime_run(bundle: Path, seconds: float, fifo: bool) -> dict:
     server = subprocess.Popen([sys.executable, "-m", "host.cli", "hil", "serve"], stdout=subprocess.PIPE, text=True)
     try:
         pty = server.stdout.readline().split()[1]
-        config = load_example("hil-serial.toml", rig={"io": f"serial://{pty}"}, loop={"realtime": fifo})
+        config = rig_config("hil-serial.toml", rig={"io": f"serial://{pty}"}, loop={"realtime": fifo})
         edge = EdgeRuntime(config, load_bundle(bundle), parse_reference("sine:amplitude=30,frequency=0.2,offset=40"))
         summary = edge.run(seconds).as_dict()
     finally:

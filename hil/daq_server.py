@@ -1,9 +1,9 @@
 """The serial DAQ of the emulated rig, served on a pseudo-terminal.
 
 The DAQ samples the pressure and displacement sensors with its own 16-bit converter (codes:
-``round(volts / 4.096 * 32768)``, saturating) at the configured rate, streams SAMPLE frames,
-and applies COMMAND frames (DAC code and valve enable) and CONFIG frames (sample rate) as they
-arrive. Like DAQ firmware, it vents the valve by itself when no COMMAND frame came for
+``edge.devices.daq_protocol.sensor_code``, saturating) at the configured rate, streams SAMPLE
+frames, and applies COMMAND frames (DAC code and valve enable) and CONFIG frames (sample rate)
+as they arrive. Like DAQ firmware, it vents the valve by itself when no COMMAND frame came for
 ``command_timeout_s`` (the host died or the cable came out). ``open_pty()`` gives a master
 descriptor for the server and the slave path the edge opens with pyserial, exactly as it would
 open ``/dev/ttyUSB0``.
@@ -29,10 +29,9 @@ from edge.devices.daq_protocol import (
     FrameDecoder,
     FrameType,
     encode_frame,
+    sensor_code,
 )
 from hil.rig import DISPLACEMENT_CHANNEL, PRESSURE_CHANNEL, HilRig
-
-DAQ_FULL_SCALE_V = 4.096
 
 
 def open_pty() -> tuple[int, str]:
@@ -51,10 +50,6 @@ class SerialFaults:
     drop_frames: int = 0
     delay_s: float = 0.0
     log: list[str] = field(default_factory=list)
-
-
-def daq_code(volts: float) -> int:
-    return min(max(round(volts / DAQ_FULL_SCALE_V * 32768), -32768), 32767)
 
 
 class DaqServer:
@@ -126,8 +121,8 @@ class DaqServer:
         )
         payload = SAMPLE_FORMAT.pack(
             int(round(t * 1e6)) & 0xFFFFFFFF,
-            daq_code(rig.analog_volts(PRESSURE_CHANNEL)),
-            daq_code(rig.analog_volts(DISPLACEMENT_CHANNEL)),
+            sensor_code(rig.analog_volts(PRESSURE_CHANNEL)),
+            sensor_code(rig.analog_volts(DISPLACEMENT_CHANNEL)),
             status,
         )
         frame = encode_frame(self._sequence, FrameType.SAMPLE, payload)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import copy
 import tomllib
 from pathlib import Path
 
@@ -19,13 +18,13 @@ HIL_RIG = REPO / "docs" / "examples" / "hil-rig.toml"  # a link to hil/configs/h
 SEED_000_SINE = "sine:amplitude=30,frequency=0.2,offset=40"
 
 
-def rig_config(**sections: dict) -> RigConfig:
-    """docs/examples/hil-rig.toml with ``sections`` merged in (e.g. loop={"rate_hz": 200})."""
-    raw = tomllib.loads(HIL_RIG.read_text())
-    raw = copy.deepcopy(raw)
+def rig_config(example: str = "hil-rig.toml", **sections: dict) -> RigConfig:
+    """``docs/examples/<example>`` with ``sections`` merged in (e.g. loop={"rate_hz": 200})."""
+    path = HIL_RIG.parent / example
+    raw = tomllib.loads(path.read_text())
     for name, values in sections.items():
         raw.setdefault(name, {}).update(values)
-    return config_from_dict(raw, str(HIL_RIG))
+    return config_from_dict(raw, str(path))
 
 
 def fit_bundle(directory: Path, model: str = "preisach") -> Path:

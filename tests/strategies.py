@@ -54,3 +54,12 @@ def random_preisach(rng: np.random.Generator, lo: float = -1.0, hi: float = 2.0)
     for p in range(1, n + 1):
         masses[p, p - 1] = rng.uniform(0.05, 1.0)
     return PreisachModel((lo, hi), everett_from_masses(masses), y_min=float(rng.normal()))
+
+
+def inverse_round_trip(forward, u: np.ndarray, branch: str):
+    """``forward`` from ``u[0]`` on ``branch``, its inverse from the matching output on the same
+    branch; returns (inverse, the input the inverse recovers from forward's output)."""
+    forward.reset(u[0], branch)
+    inverse = forward.inverse()
+    inverse.reset(forward.step(u[0]), branch)
+    return inverse, inverse.simulate(forward.simulate(u))

@@ -22,12 +22,11 @@ from edge.devices.daq_protocol import (
     FrameDecoder,
     FrameType,
     encode_frame,
+    sensor_volts,
 )
 from edge.errors import BusError
 from edge.hal.clock import Clock
 from edge.hal.serial import SerialLink
-
-DAQ_FULL_SCALE_V = 4.096
 
 
 @dataclass(frozen=True)
@@ -79,8 +78,8 @@ class DaqClient:
             t_us, pressure, displacement, status = SAMPLE_FORMAT.unpack(frame.payload)
             sample = DaqSample(
                 t_us,
-                pressure / 32768.0 * DAQ_FULL_SCALE_V,
-                displacement / 32768.0 * DAQ_FULL_SCALE_V,
+                sensor_volts(pressure),
+                sensor_volts(displacement),
                 bool(status & STATUS_ESTOP),
                 frame.sequence,
             )

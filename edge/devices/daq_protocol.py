@@ -26,6 +26,19 @@ SAMPLE_FORMAT = struct.Struct("<IhhB")
 COMMAND_FORMAT = struct.Struct("<HB")
 CONFIG_FORMAT = struct.Struct("<H")
 
+SENSOR_FULL_SCALE_V = 4.096  # the DAQ's 16-bit converter spans +-4.096 V
+
+
+def sensor_code(volts: float) -> int:
+    """A voltage as the DAQ's converter reports it (saturating at the 16-bit limits)."""
+    return min(max(round(volts / SENSOR_FULL_SCALE_V * 32768), -32768), 32767)
+
+
+def sensor_volts(code: int) -> float:
+    """A SAMPLE frame's sensor code back in volts."""
+    return code / 32768.0 * SENSOR_FULL_SCALE_V
+
+
 STATUS_ESTOP = 0x01
 STATUS_VALVE_ENABLED = 0x02
 FLAG_VALVE_ENABLE = 0x01

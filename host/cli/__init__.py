@@ -8,6 +8,7 @@ stderr and exit status 2.
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 import warnings
 from collections.abc import Callable, Sequence
@@ -20,40 +21,13 @@ HOST_ONLY_MODULES = {"scipy", "matplotlib"}
 EDGE_MODULES = {"onnxruntime", "smbus2", "serial", "gpiod"}
 
 
-def _fit(args: argparse.Namespace) -> int:
-    from host.cli.fit import run
+def _lazy(module: str, function: str = "run") -> Callable[[argparse.Namespace], int]:
+    """A subcommand whose module is imported only when it runs (``--help`` stays dependency-free)."""
 
-    return run(args)
+    def run(args: argparse.Namespace) -> int:
+        return getattr(importlib.import_module(module), function)(args)
 
-
-def _demo(args: argparse.Namespace) -> int:
-    from host.cli.demo import run
-
-    return run(args)
-
-
-def _diagnose(args: argparse.Namespace) -> int:
-    from host.cli.diagnose import run
-
-    return run(args)
-
-
-def _hil_record(args: argparse.Namespace) -> int:
-    from host.cli.hil import run_record
-
-    return run_record(args)
-
-
-def _edge_run(args: argparse.Namespace) -> int:
-    from host.cli.edge import run
-
-    return run(args)
-
-
-def _edge_telemetry(args: argparse.Namespace) -> int:
-    from host.cli.edge import telemetry
-
-    return telemetry(args)
+    return run
 
 
 def _hil_serve(args: argparse.Namespace) -> int:
@@ -72,7 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo = sub.add_parser("demo", help="identify every model on the shipped example data and compare them")
     demo.add_argument("--out", metavar="DIR", help="keep the bundles here (default: a temporary directory)")
     demo.add_argument("--json", action="store_true", help="print the comparison as JSON")
-    demo.set_defaults(run=_demo)
+    demo.set_defaults(run=_lazy("host.cli.demo"))
 
     fit = sub.add_parser("fit", help="identify a hysteresis model from a measured-data CSV")
     fit.add_argument("--model", required=True, choices=["pi", "mpi", "dpi", "preisach"])
@@ -102,7 +76,7 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--units", default="u,y", metavar="U,Y", help="units of input and output for the bundle manifest")
     fit.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     fit.add_argument("--save", metavar="DIR", help="write the lookup-table bundle (model + inverse) here")
-    fit.set_defaults(run=_fit)
+    fit.set_defaults(run=_lazy("host.cli.fit"))
 
     diag = sub.add_parser(
         "diagnose", help="what the simulation gets wrong on a recording: name the cause, extend, measure the gain"
@@ -111,7 +85,7 @@ def build_parser() -> argparse.ArgumentParser:
     diag.add_argument("--report", metavar="DIR", help="write report.md and PNG figures here")
     diag.add_argument("--json", metavar="OUT.json", help="write the result as JSON")
     diag.add_argument("--folds", type=int, default=4, help="blocked held-out folds in time (default 4)")
-    diag.set_defaults(run=_diagnose)
+    diag.set_defaults(run=_lazy("host.cli.diagnose"))
 
     edge = sub.add_parser("edge", help="the control loop that runs on the rig's computer")
     edge_sub = edge.add_subparsers(dest="edge_command", required=True, metavar="EDGE_COMMAND")
@@ -131,12 +105,12 @@ def build_parser() -> argparse.ArgumentParser:
     erun.add_argument("--settle", type=float, default=0.0, metavar="S", help="leave the first S seconds unscored")
     erun.add_argument("--telemetry", metavar="FILE", help="write per-tick telemetry here (+ FILE.events.jsonl)")
     erun.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    erun.set_defaults(run=_edge_run)
+    erun.set_defaults(run=_lazy("host.cli.edge"))
     etel = edge_sub.add_parser("telemetry", help="turn a telemetry file into CSV and a plot")
     etel.add_argument("file", metavar="FILE", help="telemetry written by pmactl edge run --telemetry")
     etel.add_argument("--csv", metavar="OUT.csv")
     etel.add_argument("--plot", metavar="OUT.png")
-    etel.set_defaults(run=_edge_telemetry)
+    etel.set_defaults(run=_lazy("host.cli.edge", "telemetry"))
 
     hil = sub.add_parser("hil", help="the emulated rig: recordings with hidden effects")
     hil_sub = hil.add_subparsers(dest="hil_command", required=True, metavar="HIL_COMMAND")
@@ -155,7 +129,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--decoy-columns", action="store_true", help="let load and temperature columns vary without any physical effect"
     )
     rec.add_argument("--out", required=True, metavar="CSV", help="output CSV; the truth goes to <name>.truth.json")
-    rec.set_defaults(run=_hil_record)
+    rec.set_defaults(run=_lazy("host.cli.hil", "run_record"))
     srv = hil_sub.add_parser("serve", help="real-time mode: serve the emulated rig's serial DAQ on a pseudo-terminal")
     srv.add_argument("--effect", default="none", choices=list(EFFECTS))
     srv.add_argument("--seed", type=int, default=0)
