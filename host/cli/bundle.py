@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction) -> None:
     keygen = sub.add_parser("keygen", help="make an Ed25519 key pair for signing bundles")
     keygen.add_argument("--out", required=True, metavar="DIR", help="writes DIR/pmactl.key (mode 0600), DIR/pmactl.pub")
     keygen.set_defaults(run=run_keygen)
@@ -21,11 +21,16 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     verify = bundle_sub.add_parser("verify", help="check signature, checksums, roles and golden vectors")
     verify.add_argument("directory", metavar="DIR")
     verify.add_argument(
-        "--trusted", action="append", default=[], metavar="PUB", help="trusted pmactl.pub (repeatable); "
-        "when given, an unsigned bundle or another signer is refused"
+        "--trusted",
+        action="append",
+        default=[],
+        metavar="PUB",
+        help="trusted pmactl.pub (repeatable); when given, an unsigned bundle or another signer is refused",
     )
     verify.set_defaults(run=run_verify)
-    inspect = bundle_sub.add_parser("inspect", help="what a bundle holds: model, units, ranges, files, signer, provenance")
+    inspect = bundle_sub.add_parser(
+        "inspect", help="what a bundle holds: model, units, ranges, files, signer, provenance"
+    )
     inspect.add_argument("directory", metavar="DIR")
     inspect.add_argument("--json", action="store_true", help="print one JSON object")
     inspect.set_defaults(run=run_inspect)
@@ -104,8 +109,13 @@ def describe(directory: str | Path) -> dict[str, object]:
 def _range(values: object, unit: str) -> str:
     if not isinstance(values, list):
         return "?"
-    return "[" + ", ".join("-inf" if v is None and i == 0 else "inf" if v is None else f"{v:.6g}"
-                           for i, v in enumerate(values)) + f"] {unit}"
+    return (
+        "["
+        + ", ".join(
+            "-inf" if v is None and i == 0 else "inf" if v is None else f"{v:.6g}" for i, v in enumerate(values)
+        )
+        + f"] {unit}"
+    )
 
 
 def run_inspect(args: argparse.Namespace) -> int:
@@ -132,7 +142,8 @@ def run_inspect(args: argparse.Namespace) -> int:
     for item in provenance.get("training_data", []) or ["no training data recorded"]:
         lines.append(
             f"  trained on {item['file']} ({item['bytes']} bytes, sha256 {item['sha256']})"
-            if isinstance(item, dict) else f"  {item}"
+            if isinstance(item, dict)
+            else f"  {item}"
         )
     files = record["files"]
     assert isinstance(files, dict)

@@ -8,15 +8,19 @@ import json
 TARGET_HELP = "a directory, or ssh://[user@]host[:port]/path (uses ~/.ssh/config, ssh-agent, known_hosts)"
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction) -> None:
     deploy = sub.add_parser("deploy", help="ship a bundle to a rig, check it there, switch to it atomically")
     deploy.add_argument("directory", metavar="DIR", help="bundle directory (its current release) or a release")
     deploy.add_argument("target", metavar="TARGET", help=TARGET_HELP)
     _common(deploy)
-    deploy.add_argument("--keep", type=int, default=5, metavar="N", help="releases kept on the target (default 5, >= 2)")
     deploy.add_argument(
-        "--post-flip", metavar="CMD", help="shell command run on the target after the switch (e.g. "
-        "'systemctl restart pmactl-edge'); a non-zero exit rolls back"
+        "--keep", type=int, default=5, metavar="N", help="releases kept on the target (default 5, >= 2)"
+    )
+    deploy.add_argument(
+        "--post-flip",
+        metavar="CMD",
+        help="shell command run on the target after the switch (e.g. "
+        "'systemctl restart pmactl-edge'); a non-zero exit rolls back",
     )
     deploy.add_argument("--json", action="store_true", help="print the outcome as one JSON object")
     deploy.set_defaults(run=run_deploy)
@@ -37,11 +41,16 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--trusted", action="append", default=[], metavar="PUB", help="trusted pmactl.pub (repeatable)")
     parser.add_argument(
-        "--tick-limit-us", type=float, default=200.0, metavar="US",
+        "--tick-limit-us",
+        type=float,
+        default=200.0,
+        metavar="US",
         help="health check: median model evaluation per tick must stay below this (default 200 us)",
     )
     parser.add_argument(
-        "--remote-python", default="python3", metavar="PATH",
+        "--remote-python",
+        default="python3",
+        metavar="PATH",
         help="Python with pmactl[edge] on an ssh target (default python3; e.g. /opt/pmactl/venv/bin/python)",
     )
 
@@ -73,8 +82,13 @@ def run_deploy(args: argparse.Namespace) -> int:
 
     outcome = asyncio.run(
         deploy(
-            args.directory, args.target, trusted=[Path(p) for p in args.trusted], keep=args.keep,
-            tick_limit_us=args.tick_limit_us, post_flip=args.post_flip, remote_python=args.remote_python,
+            args.directory,
+            args.target,
+            trusted=[Path(p) for p in args.trusted],
+            keep=args.keep,
+            tick_limit_us=args.tick_limit_us,
+            post_flip=args.post_flip,
+            remote_python=args.remote_python,
         )
     )
     _report(outcome, args.json, "deploy")
@@ -93,8 +107,12 @@ def run_rollback(args: argparse.Namespace) -> int:
     from host.deploy.deploy import rollback
 
     outcome = asyncio.run(
-        rollback(args.target, trusted=[Path(p) for p in args.trusted], tick_limit_us=args.tick_limit_us,
-                 remote_python=args.remote_python)
+        rollback(
+            args.target,
+            trusted=[Path(p) for p in args.trusted],
+            tick_limit_us=args.tick_limit_us,
+            remote_python=args.remote_python,
+        )
     )
     _report(outcome, args.json, "rollback")
     if not args.json:
@@ -109,14 +127,24 @@ def run_releases(args: argparse.Namespace) -> int:
 
     outcome = asyncio.run(list_releases(args.target, remote_python=args.remote_python))
     if args.json:
-        print(json.dumps({"target": outcome.target, "current": outcome.current, "previous": outcome.previous,
-                          "releases": outcome.releases}))
+        print(
+            json.dumps(
+                {
+                    "target": outcome.target,
+                    "current": outcome.current,
+                    "previous": outcome.previous,
+                    "releases": outcome.releases,
+                }
+            )
+        )
     _report(outcome, False, "listing releases") if not outcome.ok else None
     if not args.json:
         if not outcome.releases:
             print(f"{outcome.target}: no releases")
         for release in outcome.releases:
             mark = "current " if release["current"] else "previous" if release["previous"] else ""
-            print(f"{mark:<8} {release['id']}  {release['created_utc']}  {release['kind']:<9} "
-                  f"signer {release['signer'] or 'unsigned'}")
+            print(
+                f"{mark:<8} {release['id']}  {release['created_utc']}  {release['kind']:<9} "
+                f"signer {release['signer'] or 'unsigned'}"
+            )
     return 0

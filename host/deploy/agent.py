@@ -58,7 +58,7 @@ class Steps:
         start = time.perf_counter()
         try:
             detail = action()
-        except (PmactlError, OSError, subprocess.SubprocessError) as exc:
+        except (PmactlError, OSError, subprocess.SubprocessError, StepFailed) as exc:
             self.done.append({"step": name, "ok": False, "seconds": time.perf_counter() - start, "error": str(exc)})
             raise StepFailed(name, str(exc)) from exc
         self.done.append({"step": name, "ok": True, "seconds": time.perf_counter() - start, "detail": detail})
@@ -124,7 +124,9 @@ def install(
             steps.run("fsync", lambda: store.fsync_tree(staging))
             steps.run("verify", lambda: _check_upload(staging, release_id, trusted))
             release = steps.run("publish", lambda: str(store.publish(root, staging, release_id)))
-            steps.run("health", lambda: health_check(Path(str(release)), trusted, tick_limit_us=tick_limit_us).as_dict())
+            steps.run(
+                "health", lambda: health_check(Path(str(release)), trusted, tick_limit_us=tick_limit_us).as_dict()
+            )
             steps.run("flip", lambda: store.flip(root, release_id))
             flipped = True
             steps.run("post-flip health", lambda: health_check(root, trusted, tick_limit_us=tick_limit_us).as_dict())

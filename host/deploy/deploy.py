@@ -51,10 +51,17 @@ class Outcome:
     def as_dict(self) -> dict[str, object]:
         return asdict(self)
 
-    def fail(self, step: str, error: str) -> Outcome:
+    def fail(self, step: str, error: str, since: float | None = None) -> Outcome:
         self.ok, self.failed_step, self.error = False, step, error
-        self.steps.append({"step": step, "ok": False, "error": error})
+        self.steps.append({"step": step, "ok": False, "error": error, **_seconds(since)})
         return self
+
+    def passed(self, step: str, detail: object, since: float) -> None:
+        self.steps.append({"step": step, "ok": True, "detail": detail, **_seconds(since)})
+
+
+def _seconds(since: float | None) -> dict[str, float]:
+    return {} if since is None else {"seconds": time.perf_counter() - since}
 
 
 def _trusted_args(trusted: Sequence[Path]) -> list[str]:
@@ -92,40 +99,66 @@ async def deploy(
 ) -> Outcome:
     """Ship the release at ``source`` (a bundle directory or a release) to ``target``."""
     start = time.perf_counter()
-    url = parse_target(target)
-    outcome = Outcome(False, str(url))
+    outcome = Outcome(False, target)
+    try:
+        url = parse_target(target)
+    except PmactlError as exc:
+        return outcome.fail("arguments", str(exc))
+    outcome.target = str(url)
+    await _deploy(outcome, url, source, start, trusted, keep, tick_limit_us, post_flip, remote_python)
+    outcome.seconds = time.perf_counter() - start
+    return outcome
+
+
+async def _deploy(
+    outcome: Outcome,
+    url: TargetURL,
+    source: str | Path,
+    start: float,
+    trusted: Sequence[Path],
+    keep: int,
+    tick_limit_us: float,
+    post_flip: str | None,
+    remote_python: str,
+) -> Outcome:
     if keep < 2:
         return outcome.fail("arguments", f"--keep {keep}: keep at least 2 releases (current and previous)")
     try:
         bundle = load_bundle(source, trusted_keys=list(trusted) or None)
         trusted_args = _trusted_args(trusted)
     except PmactlError as exc:
-        return outcome.fail("local verify", str(exc))
+        return outcome.fail("local verify", str(exc), start)
     outcome.release = bundle.release_id
-    outcome.steps.append({"step": "local verify", "ok": True, "detail": bundle.identity})
-    files = [bundle.path / name for name in bundle.manifest["files"]]  # type: ignore[union-attr]
+    outcome.passed("local verify", bundle.identity, start)
+    listed = bundle.manifest["files"]
+    assert isinstance(listed, dict)  # load_bundle checked it
+    files = [bundle.path / name for name in listed]
     files.append(bundle.path / MANIFEST)
     if (bundle.path / SIGNATURE).is_file():
         files.append(bundle.path / SIGNATURE)
+    since = time.perf_counter()
     try:
         transport = await open_transport(url, remote_python)
     except PmactlError as exc:
-        return outcome.fail("connect", str(exc))
+        return outcome.fail("connect", str(exc), since)
+    outcome.passed("connect", transport.description, since)
     async with transport:
+        since = time.perf_counter()
         try:
             prepared = await _agent(transport, ["prepare", "--root", url.path], "prepare")
         except PmactlError as exc:
-            return outcome.fail("prepare", str(exc))
+            return outcome.fail("prepare", str(exc), since)
         _state(outcome, prepared)
         if not prepared.get("ok"):
-            return outcome.fail("prepare", str(prepared.get("error")))
+            return outcome.fail("prepare", str(prepared.get("error")), since)
         staging = str(prepared["staging"])
-        outcome.steps.append({"step": "prepare", "ok": True, "detail": f"{prepared.get('free_bytes')} bytes free"})
+        outcome.passed("prepare", f"{prepared.get('free_bytes')} bytes free", since)
+        since = time.perf_counter()
         try:
             outcome.bytes_sent = await transport.upload(files, staging)
-            outcome.steps.append({"step": "upload", "ok": True, "detail": f"{len(files)} files, {outcome.bytes_sent} B"})
+            outcome.passed("upload", f"{len(files)} files, {outcome.bytes_sent} B", since)
         except PmactlError as exc:
-            outcome.fail("upload", f"{exc}; the running release is untouched")
+            outcome.fail("upload", f"{exc}; the running release is untouched", since)
             try:
                 await _agent(transport, ["abort", "--root", url.path, "--staging", staging], "abort")
             except PmactlError:
@@ -145,7 +178,6 @@ async def deploy(
     outcome.rolled_back = bool(installed.get("rolled_back"))
     if not outcome.ok:
         outcome.failed_step, outcome.error = str(installed.get("failed_step")), str(installed.get("error"))
-    outcome.seconds = time.perf_counter() - start
     return outcome
 
 
@@ -155,9 +187,10 @@ def _state(outcome: Outcome, answer: dict[str, object]) -> None:
 
 
 async def _simple(target: str, args: Sequence[str], step: str, remote_python: str) -> Outcome:
-    url = parse_target(target)
-    outcome = Outcome(False, str(url))
+    outcome = Outcome(False, target)
     try:
+        url = parse_target(target)
+        outcome.target = str(url)
         async with await open_transport(url, remote_python) as transport:
             answer = await _agent(transport, [args[0], "--root", url.path, *args[1:]], step)
     except PmactlError as exc:

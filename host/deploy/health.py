@@ -48,7 +48,9 @@ class HealthReport:
         return asdict(self)
 
 
-def verify_release(directory: str | Path, trusted: Sequence[tuple[str, bytes]] | None = None) -> tuple[Bundle, HealthReport]:
+def verify_release(
+    directory: str | Path, trusted: Sequence[tuple[str, bytes]] | None = None
+) -> tuple[Bundle, HealthReport]:
     """Load and verify everything in the release; an unsigned release passes only without ``trusted``."""
     bundle = load_release(directory, trusted)
     signer = bundle.signer

@@ -14,14 +14,19 @@ from __future__ import annotations
 import asyncio
 import shlex
 import shutil
+import subprocess
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
+from typing import TYPE_CHECKING
 from urllib.parse import unquote, urlsplit
 
 from host.deploy import DeployError
+
+if TYPE_CHECKING:
+    import asyncssh
 
 CHUNK = 1 << 15
 CONNECT_TIMEOUT_S = 20.0
@@ -53,7 +58,9 @@ def parse_target(text: str) -> TargetURL:
     if parts.scheme == "file":
         return TargetURL(unquote(parts.path))
     if parts.scheme != "ssh":
-        raise DeployError(f"target {text!r}: scheme {parts.scheme!r} unknown; use a path or ssh://[user@]host[:port]/path")
+        raise DeployError(
+            f"target {text!r}: scheme {parts.scheme!r} unknown; use a path or ssh://[user@]host[:port]/path"
+        )
     try:
         port = parts.port
     except ValueError as exc:
@@ -71,7 +78,9 @@ class Transport:
     async def __aenter__(self) -> Transport:
         return self
 
-    async def __aexit__(self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
+    async def __aexit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
         await self.close()
 
     async def close(self) -> None:
@@ -94,11 +103,11 @@ class LocalTransport(Transport):
         self.description = url.path
 
     async def agent(self, args: Sequence[str]) -> tuple[int, str, str]:
-        process = await asyncio.create_subprocess_exec(
-            sys.executable, "-m", AGENT_MODULE, *args, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE
+        # a worker thread, not asyncio's subprocess: that leaves a waitpid thread behind per child
+        done = await asyncio.to_thread(
+            subprocess.run, [sys.executable, "-m", AGENT_MODULE, *args], capture_output=True, text=True
         )
-        out, err = await process.communicate()
-        return int(process.returncode or 0), out.decode(), err.decode()
+        return done.returncode, done.stdout, done.stderr
 
     async def upload(self, files: Sequence[Path], remote_dir: str) -> int:
         sent = 0
@@ -116,7 +125,7 @@ class SSHTransport(Transport):
         self.remote_python = remote_python
         self.description = str(url)
         self.sent = 0
-        self._conn: object | None = None
+        self._conn: asyncssh.SSHClientConnection | None = None
 
     async def connect(self) -> SSHTransport:
         import asyncssh
@@ -128,7 +137,7 @@ class SSHTransport(Transport):
         if self.url.user:
             options["username"] = self.url.user
         try:
-            self._conn = await asyncssh.connect(self.url.host, **options)  # type: ignore[arg-type]
+            self._conn = await asyncssh.connect(self.url.host, **options)
         except asyncssh.HostKeyNotVerifiable as exc:
             raise DeployError(
                 f"{self.url.host}: host key not trusted ({exc.reason}); check it and add it to ~/.ssh/known_hosts "
@@ -139,14 +148,14 @@ class SSHTransport(Transport):
                 f"{self.url.host}: authentication failed ({exc.reason}); load your key into ssh-agent or set "
                 "IdentityFile in ~/.ssh/config"
             ) from exc
-        except (OSError, asyncssh.Error, asyncio.TimeoutError) as exc:
+        except (OSError, asyncssh.Error, TimeoutError) as exc:
             raise DeployError(f"{self.url}: cannot connect ({_reason(exc)}); check the host, port and network") from exc
         return self
 
     async def close(self) -> None:
         if self._conn is not None:
-            self._conn.close()  # type: ignore[attr-defined]
-            await self._conn.wait_closed()  # type: ignore[attr-defined]
+            self._conn.close()
+            await self._conn.wait_closed()
             self._conn = None
 
     async def agent(self, args: Sequence[str]) -> tuple[int, str, str]:
@@ -154,7 +163,8 @@ class SSHTransport(Transport):
 
         command = shlex.join([self.remote_python, "-m", AGENT_MODULE, *args])
         try:
-            done = await self._conn.run(command, check=False)  # type: ignore[attr-defined]
+            assert self._conn is not None
+            done = await self._conn.run(command, check=False)
         except (OSError, asyncssh.Error) as exc:
             raise DeployError(f"{self.url}: connection lost while running the agent ({_reason(exc)})") from exc
         return int(done.exit_status if done.exit_status is not None else 255), str(done.stdout), str(done.stderr)
@@ -165,7 +175,8 @@ class SSHTransport(Transport):
         self.sent = 0
         total = sum(p.stat().st_size for p in files)
         try:
-            async with self._conn.start_sftp_client() as sftp:  # type: ignore[attr-defined]
+            assert self._conn is not None
+            async with self._conn.start_sftp_client() as sftp:
                 for path in files:
                     async with sftp.open(f"{remote_dir}/{path.name}", "wb") as remote:
                         with path.open("rb") as local:
