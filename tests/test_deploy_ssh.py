@@ -105,3 +105,35 @@ def test_a_failing_health_check_over_ssh_keeps_the_running_release(rig, capsys):
     assert status == 2 and "step 'health'" in err and current(path) == running
     status, _, err = deploy(capsys, url, second, "--post-flip", "exit 3")
     assert status == 2 and "step 'post-flip'" in err and "rolled back" in err and current(path) == running
+
+
+@pytest.fixture
+def tiny_tmpfs(tmp_path):
+    """A real 40 KiB tmpfs where mounting is permitted (root in CI); skipped elsewhere."""
+    import shutil
+    import subprocess
+
+    mount_point = tmp_path / "small-disk"
+    mount_point.mkdir()
+    if shutil.which("mount") is None:
+        pytest.skip("no mount command")
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=40k", "tmpfs", str(mount_point)], capture_output=True)
+    if done.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here ({done.stderr.decode().strip()}); the ENOSPC quota test covers it")
+    try:
+        yield mount_point
+    finally:
+        subprocess.run(["umount", str(mount_point)], check=True)
+
+
+def test_a_really_full_file_system_on_the_target(tiny_tmpfs, tmp_path, home, capsys):
+    """The same fault without simulation: the target directory is a 40 KiB tmpfs that holds one
+    release (about 30 KiB in pages) but not two."""
+    first, second = bundle(tmp_path / "a", 1), bundle(tmp_path / "b", 2)
+    url = f"ssh://rig{tiny_tmpfs}/rig"
+    assert deploy(capsys, url, first)[0] == 0
+    running = current(tiny_tmpfs / "rig")
+    status, _, err = deploy(capsys, url, second)
+    assert status == 2 and "space" in err.lower() and err.count("\n") == 1
+    assert current(tiny_tmpfs / "rig") == running
+    assert sorted(p.name for p in (tiny_tmpfs / "rig" / "releases").iterdir()) == [running]

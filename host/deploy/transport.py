@@ -110,9 +110,12 @@ class LocalTransport(Transport):
         return done.returncode, done.stdout, done.stderr
 
     async def upload(self, files: Sequence[Path], remote_dir: str) -> int:
-        sent = 0
+        sent, total = 0, sum(p.stat().st_size for p in files)
         for path in files:
-            await asyncio.to_thread(shutil.copyfile, path, Path(remote_dir) / path.name)
+            try:
+                await asyncio.to_thread(shutil.copyfile, path, Path(remote_dir) / path.name)
+            except OSError as exc:
+                raise DeployError(f"after {sent} of {total} bytes: {_reason(exc)}") from exc
             sent += path.stat().st_size
         return sent
 
