@@ -209,3 +209,15 @@ def test_provenance_records_the_training_data_hash(tmp_path):
     ]
     assert record["pmactl_version"]
     assert bundle.identity["bundle_id"] == hashlib.sha256((bundle.path / "manifest.json").read_bytes()).hexdigest()
+
+
+def test_fit_save_onto_a_users_file_is_one_line_and_keeps_the_file(tmp_path, capsys):
+    from host.cli import main
+    from host.examples import example_path
+
+    target = tmp_path / "results.csv"
+    target.write_text("t,u,y\n")
+    status = main(["fit", "--model", "pi", "--train", str(example_path("train")), "--save", str(target)])
+    err = capsys.readouterr().err
+    assert status == 2 and "not a directory" in err and err.count("\n") == 1
+    assert target.read_text() == "t,u,y\n" and sorted(p.name for p in tmp_path.iterdir()) == ["results.csv"]

@@ -125,3 +125,36 @@ def test_the_systemd_unit_runs_the_current_release(tmp_path):
     bundle_dir = re.search(r"--bundle (\S+)", exec_start).group(1)
     assert bundle_dir.endswith("/current")
     assert f"StateDirectory={Path(bundle_dir).parent.name}" in unit  # systemd makes the deploy target
+
+
+EDGE_ONLY = """
+import importlib.abc, runpy, sys
+class HostExtrasMissing(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path, target=None):
+        if name.split(".")[0] in {"scipy", "torch", "matplotlib", "asyncssh", "onnx", "ray", "tqdm"}:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+sys.meta_path.insert(0, HostExtrasMissing())
+sys.argv = ["agent", *sys.argv[1:]]
+runpy.run_module("host.deploy.agent", run_name="__main__")
+"""
+
+
+def test_the_target_agent_needs_only_the_edge_extra(tmp_path):
+    import shutil
+    import subprocess
+    import sys
+
+    from edge.runtime.bundle import resolve_release
+
+    def agent(*args):
+        done = subprocess.run([sys.executable, "-c", EDGE_ONLY, *map(str, args)], capture_output=True, text=True)
+        assert done.stderr == "", done.stderr
+        return json.loads(done.stdout)
+
+    source = resolve_release(bundle(tmp_path / "a"))
+    target = tmp_path / "rig"
+    staging = Path(agent("prepare", "--root", target)["staging"])
+    for path in source.iterdir():
+        shutil.copyfile(path, staging / path.name)
+    installed = agent("install", "--root", target, "--staging", staging, "--id", source.name)
+    assert installed["ok"] and installed["current"] == source.name

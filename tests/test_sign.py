@@ -40,6 +40,8 @@ def test_verify_accepts_the_trusted_signer(signed, capsys):
     directory, _, public = signed
     status, out, _ = cli(capsys, "bundle", "verify", directory, "--trusted", public)
     assert status == 0 and "(trusted)" in out and "512 golden samples" in out
+    _, other = keygen(directory.parent / "other")
+    assert cli(capsys, "bundle", "verify", directory, "--trusted", other, public)[0] == 0  # one of several
 
 
 def test_verify_refuses_an_unsigned_bundle_when_keys_are_trusted(tmp_path, capsys):

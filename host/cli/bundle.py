@@ -22,10 +22,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     verify.add_argument("directory", metavar="DIR")
     verify.add_argument(
         "--trusted",
-        action="append",
+        action="extend",
+        nargs="+",
         default=[],
         metavar="PUB",
-        help="trusted pmactl.pub (repeatable); when given, an unsigned bundle or another signer is refused",
+        help="trusted pmactl.pub files; when given, an unsigned bundle or another signer is refused",
     )
     verify.set_defaults(run=run_verify)
     inspect = bundle_sub.add_parser(

@@ -219,6 +219,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             result = abort(root, args.staging)
     except (PmactlError, OSError, StepFailed) as exc:
         result = {"ok": False, "failed_step": getattr(exc, "step", args.command), "error": str(exc)}
+    except Exception as exc:  # noqa: BLE001 - the host needs an answer it can show, not a traceback
+        result = {"ok": False, "failed_step": args.command, "error": f"agent error {type(exc).__name__}: {exc}"}
     print(json.dumps(result, default=str))
     sys.stdout.flush()
     return 0 if result.get("ok") else 1
