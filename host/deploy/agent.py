@@ -23,6 +23,7 @@ import fcntl
 import hashlib
 import json
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -203,6 +204,8 @@ def parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = parser().parse_args(argv)
+    # a dropped SSH connection must not stop an install between its flip and its checks
+    signal.signal(signal.SIGHUP, signal.SIG_IGN)
     root = args.root.expanduser()
     try:
         if args.command == "prepare":
@@ -221,8 +224,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         result = {"ok": False, "failed_step": getattr(exc, "step", args.command), "error": str(exc)}
     except Exception as exc:  # noqa: BLE001 - the host needs an answer it can show, not a traceback
         result = {"ok": False, "failed_step": args.command, "error": f"agent error {type(exc).__name__}: {exc}"}
-    print(json.dumps(result, default=str))
-    sys.stdout.flush()
+    try:
+        print(json.dumps(result, default=str))
+        sys.stdout.flush()
+    except BrokenPipeError:
+        pass  # the host went away; the outcome is on disk (current, previous) for pmactl releases
     return 0 if result.get("ok") else 1
 
 

@@ -162,7 +162,7 @@ async def _deploy(
             try:
                 await _agent(transport, ["abort", "--root", url.path, "--staging", staging], "abort")
             except PmactlError:
-                outcome.error = f"{outcome.error}; the partial upload is removed by the next deploy"
+                outcome.error = f"{outcome.error}; the partial upload never runs and a later deploy removes it"
             return outcome
         args = ["install", "--root", url.path, "--staging", staging, "--id", bundle.release_id]
         args += ["--keep", str(keep), "--tick-limit-us", str(tick_limit_us), *trusted_args]
