@@ -221,3 +221,19 @@ def test_fit_save_onto_a_users_file_is_one_line_and_keeps_the_file(tmp_path, cap
     err = capsys.readouterr().err
     assert status == 2 and "not a directory" in err and err.count("\n") == 1
     assert target.read_text() == "t,u,y\n" and sorted(p.name for p in tmp_path.iterdir()) == ["results.csv"]
+
+
+def test_a_bundle_in_the_previous_flat_layout_still_loads(tmp_path):
+    """What pmactl wrote before releases existed: manifest v1 and tables in one directory."""
+    release = resolve_release(save(tmp_path / "b"))
+    flat = tmp_path / "flat"
+    flat.mkdir()
+    for name in ("forward.npz", "inverse.npz"):
+        shutil.copyfile(release / name, flat / name)
+    manifest = json.loads((release / "manifest.json").read_text())
+    manifest["format_version"] = 1
+    del manifest["files"]["golden.npz"]
+    (flat / "manifest.json").write_text(json.dumps(manifest))
+    assert load_bundle(flat).path == flat
+    with pytest.raises(BundleError, match="older single-directory layout"):
+        save(flat)  # never rewritten in place: nothing of it is moved
