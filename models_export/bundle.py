@@ -1,14 +1,20 @@
-"""Write a model bundle: forward and inverse lookup tables plus a JSON manifest with checksums.
+"""Write a model bundle: lookup tables, golden vectors and a JSON manifest with checksums.
 
-Layout of a bundle directory::
+A bundle directory keeps complete releases and points ``current`` at one
+(:mod:`models_export.store`)::
 
-    manifest.json   format, version, model kind, units, ranges, files with sha256, fit record
-    forward.npz     lookup table of the identified model (input u -> output y)
-    inverse.npz     lookup table of its inverse (desired y -> input u), clamped and flagged
-    correction.onnx optional neural correction of the feedforward (``add_correction``)
+    DIR/current -> releases/<id>     <id>: first 16 hex digits of the manifest's SHA-256
+    DIR/releases/<id>/manifest.json  format, model kind, units, ranges, files with sha256, fit
+                                     record, provenance (training data sha256, pmactl version)
+                     forward.npz     lookup table of the identified model (input u -> output y)
+                     inverse.npz     lookup table of its inverse (desired y -> input u)
+                     golden.npz      inputs and outputs of both tables (and the correction)
+                     correction.onnx optional neural correction (``add_correction``)
+                     signature.json  optional Ed25519 signature (``pmactl bundle sign``)
 
-The directory is written next to its destination and swapped in only when complete, so a
-failed write leaves an existing bundle untouched.
+Every write makes a new release beside the old ones and flips ``current`` by rename, so a
+reader never sees a half-written bundle and the previous release stays in ``previous``.
+Nothing that is not a pmactl bundle is ever deleted or moved: such a destination is refused.
 """
 
 from __future__ import annotations
@@ -17,45 +23,72 @@ import datetime as dt
 import hashlib
 import json
 import math
+import platform
 import shutil
-import tempfile
-from collections.abc import Iterator
-from contextlib import contextmanager
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 
 from edge import __version__
+from edge.errors import BundleError
 from edge.hysteresis.base import HysteresisModel
-from edge.hysteresis.lut import write_table
-from edge.runtime.bundle import FORMAT, FORMAT_VERSION, MANIFEST
+from edge.hysteresis.lut import CompiledModel, read_table, write_table
+from edge.runtime.bundle import CURRENT, FORMAT, FORMAT_VERSION, MANIFEST, RELEASES, load_bundle, sha256_file
+from models_export import store
+from models_export.golden import GOLDEN_FILE, correction_vectors, table_vectors, write_golden
 
 CORRECTION_FILE = "correction.onnx"
-
-
-def sha256_of(path: Path) -> str:
-    """Hex SHA-256 of a file."""
-    digest = hashlib.sha256()
-    with path.open("rb") as handle:
-        for block in iter(lambda: handle.read(1 << 16), b""):
-            digest.update(block)
-    return digest.hexdigest()
+PROTECTED_FIELDS = ("format", "format_version", "files", "model", "created_utc")
+sha256_of = sha256_file  # the name callers used before
 
 
 def _json_range(values: tuple[float, float]) -> list[float | None]:
     return [v if math.isfinite(v) else None for v in values]
 
 
-@contextmanager
-def _staged(target: Path) -> Iterator[Path]:
-    """A fresh directory beside ``target``, swapped in for it when the block completes and
-    removed if it raises: a failed write never touches the existing bundle."""
-    target.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
-    try:
-        yield staging
-        _swap_in(staging, target)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
+def check_save_target(directory: str | Path) -> Path:
+    """``directory`` if a bundle may be written there (new, empty, or a pmactl bundle directory),
+    else one :class:`BundleError` line; nothing is touched either way."""
+    target = Path(directory)
+    if target.is_symlink() and not target.exists():
+        raise BundleError(f"{target}: is a dangling link; choose a new directory for the bundle (nothing written)")
+    if not target.exists():
+        return target
+    if not target.is_dir():
+        raise BundleError(
+            f"{target}: exists and is not a directory; choose a new directory for the bundle (nothing written)"
+        )
+    if store.is_store(target):
+        return target
+    entries = sorted(p.name for p in target.iterdir())
+    if not entries:
+        return target
+    if MANIFEST in entries:
+        raise BundleError(
+            f"{target}: is a bundle in the older single-directory layout; save to a new directory "
+            "(this one still loads) (nothing written)"
+        )
+    shown = ", ".join(entries[:3]) + (", ..." if len(entries) > 3 else "")
+    raise BundleError(
+        f"{target}: is a directory that is not a pmactl bundle (it holds {shown}); choose a new or empty "
+        "directory (nothing written)"
+    )
+
+
+def provenance_record(training_data: Iterable[str | Path] = ()) -> dict[str, object]:
+    """Where a bundle came from: pmactl and Python versions, host, and each training file's SHA-256."""
+    files = []
+    for item in training_data:
+        path = Path(item)
+        try:
+            files.append({"file": path.name, "sha256": sha256_file(path), "bytes": path.stat().st_size})
+        except OSError as exc:
+            raise BundleError(f"{path}: training data unreadable for the provenance record ({exc})") from exc
+    return {
+        "pmactl_version": __version__,
+        "python": platform.python_version(),
+        "host": platform.node(),
+        "training_data": files,
+    }
 
 
 def write_bundle(
@@ -65,18 +98,27 @@ def write_bundle(
     *,
     units: tuple[str, str] = ("u", "y"),
     fit_record: dict[str, object] | None = None,
+    training_data: Iterable[str | Path] = (),
+    provenance: Mapping[str, object] | None = None,
+    keep: int = store.DEFAULT_KEEP,
 ) -> Path:
-    """Write ``forward`` and ``inverse`` (in their current states) as a bundle at ``directory``."""
-    target = Path(directory)
-    with _staged(target) as staging:
-        files = {}
+    """Write ``forward`` and ``inverse`` (in their current states) as a new release at ``directory``.
+
+    ``training_data``: files the model was fitted on (their SHA-256 goes into the provenance);
+    ``provenance``: extra provenance fields; ``keep``: releases kept (current and previous always).
+    Returns ``directory``.
+    """
+    target = check_save_target(directory)
+
+    def build(staging: Path) -> dict[str, object]:
+        files: dict[str, object] = {}
         for role, model in (("forward", forward), ("inverse", inverse)):
             path = write_table(model.compile(), staging / f"{role}.npz")
-            files[path.name] = {"role": role, "kind": model.kind, "sha256": sha256_of(path)}
-        manifest = {
+            files[path.name] = {"role": role, "kind": model.kind, "sha256": sha256_file(path)}
+        return {
             "format": FORMAT,
             "format_version": FORMAT_VERSION,
-            "created_utc": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+            "created_utc": _now(),
             "pmactl_version": __version__,
             "model": {
                 "kind": forward.kind,
@@ -86,39 +128,131 @@ def write_bundle(
             },
             "files": files,
             "fit": fit_record or {},
+            "provenance": {**provenance_record(training_data), **(provenance or {})},
         }
-        (staging / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
-    return target
+
+    return _new_release(target, build, keep)
 
 
 def add_correction(directory: str | Path, model_path: str | Path, spec: dict[str, object]) -> Path:
-    """Add (or replace) the ONNX correction of the bundle at ``directory``.
+    """Add (or replace) the ONNX correction of the bundle at ``directory`` as a new release.
 
     ``spec`` is the manifest's ``correction`` entry without ``file`` (features, input, output,
-    optional state; see :mod:`edge.control.neural`). The bundle is rewritten beside the old one
-    and swapped in, so a failure leaves the old bundle as it was.
+    optional state; see :mod:`edge.control.neural`). Golden vectors of the correction are
+    recorded. Any signature is dropped (the manifest changes): sign the new release again.
     """
-    target = Path(directory)
-    manifest = json.loads((target / MANIFEST).read_text())
-    with _staged(target) as staging:
-        files = {name: entry for name, entry in manifest["files"].items() if entry.get("role") != "correction"}
-        for name in files:
-            shutil.copy2(target / name, staging / name)
-        shutil.copy2(model_path, staging / CORRECTION_FILE)
-        files[CORRECTION_FILE] = {"role": "correction", "kind": "onnx", "sha256": sha256_of(staging / CORRECTION_FILE)}
-        manifest["files"] = files
+
+    def change(staging: Path, manifest: dict[str, object]) -> None:
+        files = manifest["files"]
+        assert isinstance(files, dict)
+        for name in [n for n, e in files.items() if e.get("role") == "correction"]:
+            del files[name]
+            (staging / name).unlink(missing_ok=True)
+        shutil.copyfile(model_path, staging / CORRECTION_FILE)
+        digest = sha256_file(staging / CORRECTION_FILE)
+        files[CORRECTION_FILE] = {"role": "correction", "kind": "onnx", "sha256": digest}
         manifest["correction"] = {"file": CORRECTION_FILE, **spec}
-        (staging / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
+
+    return _derive(directory, change)
+
+
+def update_manifest(directory: str | Path, **fields: object) -> Path:
+    """Set top-level manifest fields (e.g. ``quantisation={...}``) in a new release, atomically.
+
+    The files stay as they are; ``format``, ``format_version``, ``files``, ``model`` and
+    ``created_utc`` are written by pmactl alone and refused here. A field set to ``None`` is
+    removed. Any signature is dropped (the manifest changes): sign the new release again.
+    """
+    refused = sorted(set(fields) & set(PROTECTED_FIELDS))
+    if refused:
+        raise BundleError(f"update_manifest: {', '.join(refused)} are written by pmactl itself; set other fields")
+    try:
+        json.dumps(fields)
+    except (TypeError, ValueError) as exc:
+        raise BundleError(f"update_manifest: fields must be JSON values ({exc})") from exc
+
+    def change(staging: Path, manifest: dict[str, object]) -> None:
+        for key, value in fields.items():
+            if value is None:
+                manifest.pop(key, None)
+            else:
+                manifest[key] = value
+
+    return _derive(directory, change)
+
+
+def _now() -> str:
+    return dt.datetime.now(dt.UTC).isoformat(timespec="microseconds")
+
+
+def _derive(directory: str | Path, change: Callable[[Path, dict[str, object]], None]) -> Path:
+    """A new release from the current one: its files copied, ``change`` applied, golden vectors
+    and manifest written again."""
+    target = Path(directory)
+    if not store.is_store(target):
+        raise BundleError(f"{target}: not a bundle directory with releases; write one with pmactl fit --save")
+    source = load_bundle(target)  # verified before anything is derived from it
+
+    def build(staging: Path) -> dict[str, object]:
+        manifest = json.loads(json.dumps(source.manifest))
+        files = manifest["files"]
+        for name, entry in list(files.items()):
+            if entry.get("role") == "golden":
+                del files[name]
+            else:
+                shutil.copyfile(source.path / name, staging / name)
+        change(staging, manifest)
+        manifest["created_utc"] = _now()
+        manifest["derived_from"] = source.manifest_sha256
+        return manifest
+
+    return _new_release(target, build, store.DEFAULT_KEEP)
+
+
+def _new_release(target: Path, build: Callable[[Path], dict[str, object]], keep: int) -> Path:
+    """Run ``build`` into a staging directory, add golden vectors, publish, flip ``current``."""
+    if keep < 2:
+        raise BundleError(f"keep={keep}: keep at least 2 releases (the current and the one to roll back to)")
+    created = [p for p in (target, target / RELEASES) if not p.exists()]
+    staging = store.new_staging(target)
+    try:
+        manifest = build(staging)
+        _add_golden(staging, manifest)
+        text = json.dumps(manifest, indent=2) + "\n"
+        (staging / MANIFEST).write_text(text)
+        release_id = hashlib.sha256(text.encode()).hexdigest()[:16]
+        store.publish(target, staging, release_id)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        for path in reversed(created):  # only directories this call made, and only when empty
+            if not any(path.iterdir()):
+                path.rmdir()
+        raise
+    store.flip(target, release_id)
+    store.prune(target, keep)
     return target
 
 
-def _swap_in(staging: Path, target: Path) -> None:
-    """Replace ``target`` by ``staging``; the old bundle survives until the new one is in place."""
-    if not target.exists():
-        staging.rename(target)
-        return
-    retired = target.with_name(f".{target.name}.old")
-    shutil.rmtree(retired, ignore_errors=True)
-    target.rename(retired)
-    staging.rename(target)
-    shutil.rmtree(retired, ignore_errors=True)
+def _add_golden(staging: Path, manifest: dict[str, object]) -> None:
+    files = manifest["files"]
+    assert isinstance(files, dict)
+    by_role = {entry["role"]: name for name, entry in files.items()}
+    forward = CompiledModel(read_table(staging / by_role["forward"]))
+    inverse = CompiledModel(read_table(staging / by_role["inverse"]))
+    vectors = table_vectors(forward, inverse)
+    if "correction" in by_role:
+        spec = manifest["correction"]
+        assert isinstance(spec, dict)
+        vectors.update(correction_vectors(staging / by_role["correction"], spec, inverse))
+    path = write_golden(staging / GOLDEN_FILE, vectors)
+    files[GOLDEN_FILE] = {"role": "golden", "kind": "npz", "sha256": sha256_file(path)}
+
+
+__all__ = [
+    "CURRENT",
+    "add_correction",
+    "check_save_target",
+    "provenance_record",
+    "update_manifest",
+    "write_bundle",
+]

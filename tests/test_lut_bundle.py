@@ -72,12 +72,22 @@ def test_bundle_round_trip_and_manifest(tmp_path):
     assert bundle.inverse.step(bundle.forward.step(u)) == pytest.approx(u)
 
 
+@pytest.mark.parametrize("kind", FACTORIES)
+def test_every_model_kind_passes_the_role_and_golden_checks(tmp_path, kind):
+    model = FACTORIES[kind](np.random.default_rng(3))
+    model.reset(model.memory_range[0], "descending")
+    inverse = model.inverse()
+    inverse.reset(inverse.input_range[0], "descending")
+    bundle = load_bundle(write_bundle(tmp_path / kind, model, inverse, units=("bar", "mm")))
+    assert bundle.manifest["model"]["kind"] == kind and "golden.npz" in bundle.manifest["files"]
+
+
 def test_tampered_bundle_is_refused(tmp_path):
-    directory = make_bundle(tmp_path)
-    with (directory / "inverse.npz").open("ab") as handle:
+    release = load_bundle(make_bundle(tmp_path)).path
+    with (release / "inverse.npz").open("ab") as handle:
         handle.write(b"x")
     with pytest.raises(BundleError, match="checksum mismatch"):
-        load_bundle(directory)
+        load_bundle(tmp_path / "bundle")
 
 
 def test_missing_manifest_is_refused(tmp_path):
@@ -87,7 +97,7 @@ def test_missing_manifest_is_refused(tmp_path):
 
 def test_failed_write_keeps_the_old_bundle(tmp_path):
     directory = make_bundle(tmp_path)
-    before = (directory / "manifest.json").read_text()
+    before = load_bundle(directory).manifest_sha256
 
     class Broken:
         kind = "broken"
@@ -98,5 +108,19 @@ def test_failed_write_keeps_the_old_bundle(tmp_path):
 
     with pytest.raises(RuntimeError):
         write_bundle(directory, Broken(), Broken())  # type: ignore[arg-type]
-    assert (directory / "manifest.json").read_text() == before
-    assert [p.name for p in tmp_path.iterdir()] == ["bundle"]  # no staging left behind
+    assert load_bundle(directory).manifest_sha256 == before
+    assert [p.name for p in tmp_path.iterdir()] == ["bundle"]
+    assert len(list((directory / "releases").iterdir())) == 1  # no staging left behind
+
+
+def test_a_failed_first_write_leaves_nothing_behind(tmp_path):
+    class Broken:
+        kind = "broken"
+        input_range = (0.0, 1.0)
+
+        def compile(self):
+            raise RuntimeError("export failed")
+
+    with pytest.raises(RuntimeError):
+        write_bundle(tmp_path / "new", Broken(), Broken())  # type: ignore[arg-type]
+    assert list(tmp_path.iterdir()) == []

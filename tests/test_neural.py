@@ -99,9 +99,9 @@ def bundle_with_correction(tmp_path_factory):
 def test_the_bundle_carries_the_correction_with_its_checksum(bundle_with_correction):
     bundle = load_bundle(bundle_with_correction)
     assert bundle.correction_path.name == "correction.onnx" and bundle.correction_spec["features"] == FEATURES
-    manifest = json.loads((bundle_with_correction / "manifest.json").read_text())
+    manifest = json.loads((bundle.path / "manifest.json").read_text())
     assert manifest["files"]["correction.onnx"]["role"] == "correction"
-    with (bundle_with_correction / "correction.onnx").open("r+b") as handle:
+    with (bundle.path / "correction.onnx").open("r+b") as handle:
         original = handle.read()
         handle.seek(len(original) // 2)
         handle.write(b"\x00\x01\x02")
@@ -109,7 +109,7 @@ def test_the_bundle_carries_the_correction_with_its_checksum(bundle_with_correct
         with pytest.raises(BundleError, match="checksum mismatch"):
             load_bundle(bundle_with_correction)
     finally:
-        (bundle_with_correction / "correction.onnx").write_bytes(original)
+        (bundle.path / "correction.onnx").write_bytes(original)
 
 
 def test_the_runtime_adds_the_correction_every_tick(bundle_with_correction, tmp_path):
