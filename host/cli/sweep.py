@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import shlex
 import signal
 import sys
@@ -45,7 +46,11 @@ def run(args: argparse.Namespace) -> int:
 
     matrix = load_matrix(args.matrix)
     if args.list:
-        return _list(matrix)
+        try:
+            return _list(matrix)
+        except BrokenPipeError:  # pmactl sweep --list | head
+            sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - stays open until exit
+            return 0
     out = Path(args.out) if args.out else Path("sweeps") / matrix.name
     backend = make_backend(args.ray, args.workers, matrix.resources)
     previous = signal.signal(signal.SIGTERM, _interrupt)  # after ray.init, which installs its own

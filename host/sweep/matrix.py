@@ -31,7 +31,7 @@ from host.sweep.thresholds import Threshold, parse_thresholds
 
 TOP_LEVEL = {
     "kind", "name", "description", "timeout_s", "retries", "retry_on", "seed", "axes", "values", "paths",
-    "choices", "files", "steps", "thresholds", "resources", "env", "timing_columns",
+    "choices", "files", "steps", "before", "thresholds", "resources", "env", "timing_columns",
 }  # fmt: skip
 RETRY_KINDS = ("timeout", "signal", "error")
 # columns of the results table besides axes and metrics; an axis may not take one of these names
@@ -99,6 +99,10 @@ def load_matrix(path: str | Path) -> Matrix:
     kind = KINDS[kind_name]
     base = path.resolve().parent
     steps = _steps(doc.get("steps"), kind, where)
+    if "before" in doc:  # steps of the matrix's own run before the preset's (e.g. fit the bundle first)
+        steps = _steps(doc["before"], kind, f"{where}: before") + steps
+        if len({s.name for s in steps}) != len(steps):
+            raise ConfigError(f"{where}: step names {[s.name for s in steps]} repeat; name each [[before]] step")
     axes = {name: _axis_values(name, spec, base, where) for name, spec in _table(doc, "axes", where).items()}
     clash = sorted(set(axes) & (set(ROW_COLUMNS) - {"seed"}) | set(axes) & {"attempt", "cell_dir"})
     if clash:
