@@ -15,6 +15,7 @@ import csv
 import fcntl
 import json
 import os
+import warnings
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -51,8 +52,15 @@ class Journal:
         """Every record written so far, oldest first."""
         if not self.path.exists():
             return []
+        records = []
         with open(self.path) as f:
-            return [json.loads(line) for line in f if line.strip()]
+            for line in f:
+                try:
+                    records.append(json.loads(line))
+                except ValueError:  # torn by an interrupt during this run's last write; cut on the next start
+                    if line.endswith("\n"):
+                        raise ConfigError(f"{self.path}: a line is corrupt; remove it to resume") from None
+        return records
 
     def finished(self) -> dict[str, dict[str, Any]]:
         """The final record of every cell that has one, by cell key (the latest wins)."""
@@ -92,7 +100,11 @@ def write_table(out: Path, rows: list[dict[str, Any]], columns: list[str]) -> li
         import pyarrow.parquet as pq
     except ImportError:
         return written
-    table = pa.Table.from_pylist([{c: row.get(c) for c in columns} for row in rows])
+    try:
+        table = pa.Table.from_pylist([{c: row.get(c) for c in columns} for row in rows])
+    except (pa.ArrowInvalid, pa.ArrowTypeError) as exc:  # a column mixing numbers and text
+        warnings.warn(f"{out / PARQUET} not written ({exc}); {out / TABLE} has every row", stacklevel=2)
+        return written
     written.append(_atomic(out / PARQUET, lambda f: pq.write_table(table, f), text=False))
     return written
 

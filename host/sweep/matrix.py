@@ -1,7 +1,9 @@
 """A sweep matrix (``*.sweep.toml``): loaded, checked, and expanded into cells.
 
-The file names a job kind (:mod:`host.sweep.presets`), the axes to cross, fixed values, named
-choices, files to render per cell, thresholds and a retry policy; see
+The file names a job kind (:mod:`host.sweep.presets`), the axes to cross, fixed values
+(``[values]``, or ``[paths]`` resolved against the matrix file), named choices, files to render
+per cell (``[files.NAME]``: a template with ``set`` keys), the steps (``[[steps]]`` replaces the
+preset's, ``[[before]]`` runs ahead of them), thresholds and a retry policy; see
 ``docs/examples/*.sweep.toml``. Every mistake is one :class:`ConfigError` line naming the file,
 the key and the fix. Axis values are a TOML list, ``"A..B"`` (integers A to B inclusive) or
 ``"glob:PATTERN"`` (files, relative to the matrix file).

@@ -52,8 +52,9 @@ def render_args(args: list[str], values: Mapping[str, Value], where: str) -> lis
     out: list[str] = []
     for arg in args:
         whole = PLACEHOLDER.fullmatch(arg)
-        if whole and isinstance(values.get(whole.group(1)), list):
-            out.extend(str(a) for a in values[whole.group(1)])  # type: ignore[union-attr]
+        spliced = values.get(whole.group(1)) if whole else None
+        if isinstance(spliced, list):  # its elements may hold placeholders: extra = ["--operators", "{n}"]
+            out.extend(render_text(str(a), values, strict=True, where=where) for a in spliced)
         else:
             out.append(render_text(arg, values, strict=True, where=where))
     return out

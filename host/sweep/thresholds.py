@@ -6,8 +6,8 @@
     "run.faults.n" = { max = 0 }
     "fit.tests.0.rmse_pct_pp" = [{ max = 15, where = { model = "pi" } }, { max = 5 }]
 
-A limit has ``min``, ``max`` and/or ``equals``; ``where`` restricts it to cells whose axis
-labels match. A missing or non-numeric metric fails a numeric limit (never silently passes).
+A limit has ``min``, ``max`` and/or ``equals`` (``equals = "{effect}"`` compares with the
+cell's own label); ``where`` restricts it to cells whose axis labels match. A missing or non-numeric metric fails a numeric limit (never silently passes).
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from edge.errors import ConfigError
+from host.sweep.template import render_text
 
 
 @dataclass(frozen=True)
@@ -30,13 +31,16 @@ class Threshold:
     def applies(self, labels: dict[str, Any]) -> bool:
         return all(str(labels.get(axis)) == value for axis, value in self.where)
 
-    def check(self, metrics: dict[str, Any]) -> str | None:
+    def check(self, metrics: dict[str, Any], labels: dict[str, Any]) -> str | None:
         """``None`` when the cell passes, else the reason in a few words."""
         if self.metric not in metrics or metrics[self.metric] is None:
             return f"{self.metric} missing"
         value = metrics[self.metric]
         if self.equals is not None:
-            return None if value == self.equals else f"{self.metric}={value!r} != {self.equals!r}"
+            expected = self.equals
+            if isinstance(expected, str):  # "{effect}": the cell's own label, e.g. the hidden effect to name
+                expected = render_text(expected, {k: str(v) for k, v in labels.items()}, strict=False, where="")
+            return None if value == expected else f"{self.metric}={value!r} != {expected!r}"
         if isinstance(value, bool) or not isinstance(value, int | float) or math.isnan(value):
             return f"{self.metric}={value!r} is not a number"
         if self.maximum is not None and value > self.maximum:
@@ -69,7 +73,7 @@ def parse_thresholds(raw: object, axes: set[str], where: str) -> list[Threshold]
 
 def evaluate(thresholds: list[Threshold], labels: dict[str, Any], metrics: dict[str, Any]) -> list[str]:
     """Reasons the cell fails its thresholds (empty: it passes)."""
-    return [reason for t in thresholds if t.applies(labels) and (reason := t.check(metrics)) is not None]
+    return [reason for t in thresholds if t.applies(labels) and (reason := t.check(metrics, labels)) is not None]
 
 
 def _parse_limit(metric: str, limit: object, axes: set[str], here: str) -> Threshold:
