@@ -8,6 +8,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import socket
 import subprocess
 import sys
 import time
@@ -340,3 +341,21 @@ def test_hil_run_cells_fill_the_rig_config_from_their_axes(tmp_path):
     # a dead time in the loop costs tracking (or trips the tracking-error fault)
     delayed = rows["transport_delay"]
     assert delayed["run.faults.n"] > 0 or delayed["run.rms_error"] > rows["none"]["run.rms_error"]
+
+
+def test_an_unreachable_ray_address_is_one_line_not_a_hang(tmp_path):
+    """ray.init retries a dead head node for minutes; the sweep asks first and names the fix."""
+    pytest.importorskip("ray", reason="ray not installed (pip install 'pmactl[cluster]')")
+    matrix = record_and_fit(tmp_path / "m.sweep.toml", seeds="1..1")
+    with socket.socket() as closed:  # a port nothing listens on
+        closed.bind(("127.0.0.1", 0))
+        port = closed.getsockname()[1]
+    done = subprocess.run(
+        [sys.executable, "-m", "host.cli", "sweep", str(matrix), "--ray", f"127.0.0.1:{port}"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 2
+    (line,) = done.stderr.strip().splitlines()
+    assert "nothing answers there" in line and "--ray local" in line

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import logging
 import os
+import socket
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor
 from concurrent.futures import wait as wait_futures
 from typing import Any, Protocol
@@ -22,6 +23,7 @@ from host.sweep import runner
 from host.sweep.presets import Resources
 
 Outcome = dict[str, Any]
+PROBE_TIMEOUT_S = 5.0
 
 
 class Backend(Protocol):
@@ -90,6 +92,7 @@ class RayBackend:
             options: dict[str, Any] = {"include_dashboard": False, "logging_level": logging.WARNING}
             if address == "local":
                 options.update(num_cpus=workers or os.cpu_count(), object_store_memory=80 * 2**20)
+            _probe(address)
             try:
                 ray.init(address=address, **options)
             except (ConnectionError, ValueError, RuntimeError) as exc:
@@ -174,6 +177,22 @@ def make_backend(ray_address: str | None, workers: int | None, resources: Resour
     if ray_address is None:
         return LocalBackend(workers, resources)
     return RayBackend(ray_address, workers, resources)
+
+
+def _probe(address: str | None) -> None:
+    """Refuse an address nothing answers at: ray.init retries an unreachable head for minutes."""
+    if address in (None, "auto", "local"):
+        return
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    if not host or not port.isdigit():
+        raise ConfigError(f"--ray {address}: give HOST:PORT, ray://HOST:PORT, auto or local")
+    try:
+        socket.create_connection((host, int(port)), timeout=PROBE_TIMEOUT_S).close()
+    except OSError as exc:
+        raise ConfigError(
+            f"--ray {address}: nothing answers there ({exc.strerror or exc}); check the head node's address "
+            "(ray status on the head prints it) or use --ray local"
+        ) from None
 
 
 def _available_memory_mb() -> int | None:

@@ -102,8 +102,7 @@ def run_sweep(
                         continue
                     ran += 1
                     bar.update(1)
-                if bar is not None:
-                    _postfix(bar, matrix, journal, len(inflight))
+                _postfix(bar, matrix, journal, len(inflight))
                 if time.monotonic() - last_write > REWRITE_EVERY_S:
                     tables()
                     last_write = time.monotonic()

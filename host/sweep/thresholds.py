@@ -7,7 +7,8 @@
     "fit.tests.0.rmse_pct_pp" = [{ max = 15, where = { model = "pi" } }, { max = 5 }]
 
 A limit has ``min``, ``max`` and/or ``equals`` (``equals = "{effect}"`` compares with the
-cell's own label); ``where`` restricts it to cells whose axis labels match. A missing or non-numeric metric fails a numeric limit (never silently passes).
+cell's own label); ``where`` restricts it to cells whose axis labels match. A missing or
+non-numeric metric fails a numeric limit (never silently passes).
 """
 
 from __future__ import annotations
