@@ -158,18 +158,26 @@ def _comparable_rows(out: Path, timing: tuple[str, ...]) -> list[dict[str, str]]
 
 
 def _on_paper(base: dict[str, float | str]) -> None:
-    """The same matrix on N machines: cells spread over N x cores slots, plus Ray's fixed costs."""
+    """The same matrix on N machines: cells spread over N x cores slots, plus Ray's fixed costs.
+
+    Two per-cell costs: this run's wall per cell at 1 worker (what this shared VM gave), and the
+    cells' CPU per cell (what one free core needs; process start-up included).
+    """
     cells = int(base["cells"])
-    per_cell = float(base["wall"]) / cells  # 1 worker: one cell after another, process start-up included
+    wall_cell, cpu_cell = float(base["wall"]) / cells, float(base["cells_cpu"]) / cells
     print()
-    print(f"On paper ({cells} cells, {per_cell:.2f} s per cell on one core of this VM, Ray start ~10 s):")
-    print("| machines x cores | emulated rig: wall | physical rigs (pma_rig: 1 per machine, 30 s real time per cell) |")
-    print("|---|---:|---:|")
+    print(f"On paper ({cells} cells; per cell {wall_cell:.2f} s wall here at 1 worker, {cpu_cell:.2f} s CPU;")
+    print("Ray: ~10 s to start or join, ~ms per task; physical rigs: pma_rig = 1 per machine, 30 s real time per cell)")
+    print("| machines x cores | wall, this VM's cell time | wall, free cores | physical rigs |")
+    print("|---|---:|---:|---:|")
     for machines, cores in ((1, 2), (2, 2), (4, 2), (8, 2), (4, 16), (16, 16)):
-        slots = machines * cores
-        emulated = math.ceil(cells / slots) * per_cell + (10.0 if machines > 1 else 0.0)
+        rounds = math.ceil(cells / (machines * cores))
+        ray = 10.0 if machines > 1 else 0.0
         physical = math.ceil(cells / machines) * 30.0
-        print(f"| {machines} x {cores} | {emulated:.0f} s | {physical / 60:.1f} min |")
+        print(
+            f"| {machines} x {cores} | {rounds * wall_cell + ray:.0f} s | {rounds * cpu_cell + ray:.0f} s "
+            f"| {physical / 60:.1f} min |"
+        )
 
 
 if __name__ == "__main__":

@@ -35,7 +35,10 @@ def render_text(text: str, values: Mapping[str, Value], *, strict: bool, where: 
         name = match.group(1)
         if name not in values:
             if strict:
-                raise ConfigError(f"{where}: placeholder {{{name}}} has no value; known: {sorted(values)}")
+                raise ConfigError(
+                    f"{where}: placeholder {{{name}}} has no value; give it in [values], [paths] or [axes] "
+                    f"(known: {', '.join(sorted(values))})"
+                )
             return match.group(0)
         value = values[name]
         if isinstance(value, list):
