@@ -284,7 +284,7 @@ def test_a_second_sweep_on_the_same_folder_is_refused(tmp_path, capsys):
 
 def test_a_killed_sweep_resumes_without_rerunning_finished_cells(tmp_path):
     """SIGKILL mid-run (a crash or a reboot), then the same command: finished cells are kept."""
-    matrix = record_and_fit(tmp_path / "m.sweep.toml", seeds="1..6")
+    matrix = record_and_fit(tmp_path / "m.sweep.toml", seeds="1..4")
     out = tmp_path / "out"
     first = sweep_process(str(matrix), "--out", str(out), "--workers", "1", "--json")
     journal = out / "cells.jsonl"
@@ -293,15 +293,15 @@ def test_a_killed_sweep_resumes_without_rerunning_finished_cells(tmp_path):
     first.communicate()
     wait_until(lambda: not processes_working_in(out), 60, "the orphaned cell to end")
     done_before = [json.loads(line)["key"] for line in journal.read_text().splitlines()]
-    assert 2 <= len(done_before) < 6
+    assert 2 <= len(done_before) < 4
 
     second = sweep_process(str(matrix), "--out", str(out), "--workers", "1", "--json")
     stdout, stderr = second.communicate(timeout=120)
     assert second.returncode == 0, stderr
     summary = json.loads(stdout)
-    assert (summary["pass"], summary["resumed"], summary["ran"]) == (6, len(done_before), 6 - len(done_before))
+    assert (summary["pass"], summary["resumed"], summary["ran"]) == (4, len(done_before), 4 - len(done_before))
     keys = [json.loads(line)["key"] for line in journal.read_text().splitlines()]
-    assert sorted(keys) == sorted(set(keys)) and len(keys) == 6  # each cell ran to completion once
+    assert sorted(keys) == sorted(set(keys)) and len(keys) == 4  # each cell ran to completion once
     for key in done_before:
         assert [p.name for p in (out / "cells" / key).iterdir()] == ["attempt-1"]
 
