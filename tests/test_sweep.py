@@ -359,3 +359,14 @@ def test_an_unreachable_ray_address_is_one_line_not_a_hang(tmp_path):
     assert done.returncode == 2
     (line,) = done.stderr.strip().splitlines()
     assert "nothing answers there" in line and "--ray local" in line
+
+
+def test_a_spliced_list_fills_its_own_placeholders(tmp_path, capsys):
+    """extra = ["--operators", "{operators}"]: the preset's "{extra}" argument takes the axis value."""
+    matrix = write(
+        tmp_path / "m.sweep.toml",
+        'kind = "fit"\n[axes]\noperators = [8, 25]\n[values]\nextra = ["--operators", "{operators}"]\n',
+    )
+    assert main(["sweep", str(matrix), "--list"]) == 0
+    out = capsys.readouterr().out
+    assert "--operators 8 --json" in out and "--operators 25 --json" in out
