@@ -138,6 +138,7 @@ def build_parser() -> argparse.ArgumentParser:
     srv.set_defaults(run=_hil_serve)
     importlib.import_module("host.cli.bundle").register(sub)
     importlib.import_module("host.cli.deploy").register(sub)
+    importlib.import_module("host.cli.sweep").register(sub)
     return parser
 
 
