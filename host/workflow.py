@@ -7,6 +7,7 @@ from pathlib import Path
 
 from edge.errors import ModelError
 from edge.hysteresis.base import HysteresisModel
+from host.cli.options import OPERATORS
 from host.data import Measurement
 from host.evaluate import Prediction, predict_unknown_start
 from host.identify import ESTIMATORS, DPIEstimator, MPIEstimator, PIEstimator, PreisachEstimator
@@ -24,19 +25,28 @@ def make_estimator(
 ) -> Estimator:
     """An unfitted estimator for ``model`` (``pi``, ``mpi``, ``dpi``, ``preisach``).
 
-    ``operators`` is the number of play operators / digits, or grid intervals for Preisach.
+    ``operators`` is the number of play operators / digits, or grid intervals for Preisach
+    (``None``: the model's default); outside the model's range (:data:`OPERATORS`) it is refused.
     """
     if model not in ESTIMATORS:
         raise ModelError(f"model {model!r} unknown; choose one of {', '.join(ESTIMATORS)}")
+    default, lowest, highest = OPERATORS[model]
+    if operators is None:
+        operators = default
+    elif not lowest <= operators <= highest:
+        raise ModelError(
+            f"--operators {operators} is outside {lowest}-{highest} for {model} (default {default}); "
+            "choose a count in that range"
+        )
     if model == "preisach":
-        return PreisachEstimator(n_levels=operators or 20, method=preisach_method)  # type: ignore[arg-type]
+        return PreisachEstimator(n_levels=operators, method=preisach_method)  # type: ignore[arg-type]
     if model == "pi":
-        return PIEstimator(n_operators=operators or 25, parameterisation=parameterisation)  # type: ignore[arg-type]
+        return PIEstimator(n_operators=operators, parameterisation=parameterisation)  # type: ignore[arg-type]
     if model == "mpi":
-        return MPIEstimator(n_operators=operators or 25, parameterisation=parameterisation)  # type: ignore[arg-type]
+        return MPIEstimator(n_operators=operators, parameterisation=parameterisation)  # type: ignore[arg-type]
     if parameterisation != "free":
         raise ModelError(f"--parameterisation {parameterisation} applies to the pi and mpi models only")
-    return DPIEstimator(n_operators=operators or 25)
+    return DPIEstimator(n_operators=operators)
 
 
 @dataclass

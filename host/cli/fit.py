@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 from edge.errors import DataError
+from host.cli.outputs import check_output
 from host.data import load_measurement
 from host.workflow import make_estimator, save_bundle, score_on
 
@@ -22,6 +23,8 @@ def run(args: argparse.Namespace) -> int:
     units = parse_units(args.units)
     if not 0 < args.calibration < 0.9:
         raise DataError(f"--calibration {args.calibration} must be between 0 and 0.9")
+    if args.save:
+        check_output(args.save, "--save", kind="dir")
     train = load_measurement(args.train)
     tests = [load_measurement(path) for path in args.test]
     estimator = make_estimator(

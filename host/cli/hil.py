@@ -6,11 +6,13 @@ import argparse
 
 from edge.errors import DataError
 from hil.record import record, truth_path, write_recording
+from host.cli.outputs import check_output
 
 
 def run_record(args: argparse.Namespace) -> int:
     if not 1.0 <= args.duration <= 24 * 3600:
         raise DataError(f"--duration {args.duration} s is outside 1 s .. 24 h")
+    check_output(args.out, "--out")
     try:
         recording = record(
             args.scenario, args.seed, args.duration, args.effect, args.rate, decoy_columns=args.decoy_columns

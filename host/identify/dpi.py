@@ -74,6 +74,9 @@ class DPIEstimator(HysteresisEstimator):
         self.closure_weight = closure_weight
         self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
 
+    def _parameter_count(self) -> int:
+        return 2 * self.n_operators + 1
+
     def _identify(self, u: NDArray[np.float64], y: NDArray[np.float64], start: MemoryStart) -> DPIModel:
         n = self.n_operators
         target = y[start.index :]

@@ -84,6 +84,9 @@ class MPIEstimator(HysteresisEstimator):
         self.parameterisation = parameterisation
         self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
 
+    def _parameter_count(self) -> int:
+        return self.n_operators + self.n_dead_zones + 1
+
     def _identify(self, u: NDArray[np.float64], y: NDArray[np.float64], start: MemoryStart) -> MPIModel:
         target = y[start.index :]
         knots = np.linspace(target.min(), target.max(), self.n_dead_zones + 2)

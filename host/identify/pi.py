@@ -64,6 +64,9 @@ class PIEstimator(HysteresisEstimator):
         self.parameterisation = parameterisation
         self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
 
+    def _parameter_count(self) -> int:
+        return self.n_operators + 1
+
     def _identify(self, u: NDArray[np.float64], y: NDArray[np.float64], start: MemoryStart) -> PIModel:
         target = y[start.index :]
         if self.parameterisation == "free":
