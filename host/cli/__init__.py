@@ -119,7 +119,7 @@ def build_parser() -> argparse.ArgumentParser:
     hil = sub.add_parser("hil", help="the emulated rig: recordings with hidden effects")
     hil_sub = hil.add_subparsers(dest="hil_command", required=True, metavar="HIL_COMMAND")
     rec = hil_sub.add_parser("record", help="run a test protocol on the emulated rig and write a measured-data CSV")
-    rec.add_argument("--scenario", required=True, choices=list(SCENARIOS))
+    rec.add_argument("--scenario", required=True, choices=list(SCENARIOS), help="test protocol the rig runs")
     rec.add_argument("--seed", type=int, default=0, help="random seed (protocol details and effect parameters)")
     rec.add_argument("--duration", type=float, default=120.0, metavar="S", help="seconds of recording (default 120)")
     rec.add_argument(
