@@ -120,7 +120,7 @@ def exponential_search(
     beta_max = float(np.ptp(u)) / 2.0 / (n - 1)  # largest threshold at half the input range
 
     def profile(beta: float) -> tuple[float, float]:
-        thresholds = beta * np.arange(n)
+        thresholds = beta * np.arange(n, dtype=np.float64)
         plays = start_plays(u, thresholds, start)
         span = 8.0 / thresholds[-1]
         search = minimize_scalar(
