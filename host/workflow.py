@@ -10,10 +10,10 @@ import numpy as np
 
 from edge.errors import ModelError
 from edge.hysteresis.base import HysteresisModel
-from host.cli.options import OPERATORS
 from host.data import Measurement
 from host.evaluate import Prediction, predict_unknown_start
 from host.identify import ESTIMATORS, DPIEstimator, MPIEstimator, PIEstimator, PreisachEstimator
+from host.operator_ranges import OPERATORS
 from models_export.bundle import write_bundle
 
 Estimator = PIEstimator | MPIEstimator | DPIEstimator | PreisachEstimator

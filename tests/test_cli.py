@@ -290,3 +290,20 @@ def test_progress_names_each_step_on_stderr_and_stops_its_clock(capsys):
         steps.start("fitting on 10 samples")
     err = capsys.readouterr().err
     assert "reading a.csv" in err and "fitting on 10 samples" in err  # the leak guard checks the clock thread
+
+
+@pytest.mark.parametrize(
+    "option, target, message",
+    [
+        ("--plot", "x.xyz", "cannot write the format '.xyz'; end the name in .png"),
+        ("--csv", "no/such/dir/run.csv", "does not exist; create it"),
+    ],
+)
+def test_edge_telemetry_outputs_are_checked_before_reading(demo, tmp_path, option, target, message):
+    telemetry = demo[2] / "tracking-pid.pmt"
+    assert one_line_error(run_pmactl("edge", "telemetry", str(telemetry), option, str(tmp_path / target)), message)
+
+
+def test_hil_record_shows_no_progress_in_a_pipe(tmp_path):
+    result = run_pmactl("hil", "record", "--scenario", "sines", "--duration", "2", "--out", str(tmp_path / "r.csv"))
+    assert result.returncode == 0 and result.stderr == "" and (tmp_path / "r.csv").exists()
