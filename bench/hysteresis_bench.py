@@ -98,7 +98,11 @@ def fit_table(largest: int) -> None:
 
 
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
-BUSY_SIZES = ((10_000, {}), (100_000, {}), (20_000, {"preisach": 40}))  # the last: a finer Everett grid
+BUSY_SIZES: tuple[tuple[int, dict[str, int]], ...] = (
+    (10_000, {}),
+    (100_000, {}),
+    (20_000, {"preisach": 40}),
+)  # the last: a finer Everett grid
 # Measured 2026-11-24, 2 cores, load ~6 from other jobs (``python bench/hysteresis_bench.py --busy-only``):
 # busy with BLAS default vs sized, wall / CPU [s]: dpi 10^4 4.06 / 0.90 vs 0.37 / 0.06; preisach 10^5
 # 15.1 / 3.4 vs 4.7 / 0.7; preisach with 40 intervals on 2*10^4 72.4 / 16.6 vs 7.9 / 1.1.
