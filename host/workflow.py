@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,6 +18,10 @@ from host.operator_ranges import OPERATORS
 from models_export.bundle import write_bundle
 
 Estimator = PIEstimator | MPIEstimator | DPIEstimator | PreisachEstimator
+
+
+class ConstantOutputWarning(UserWarning):
+    """A held-out recording whose output y never moves."""
 
 
 def make_estimator(
@@ -63,7 +68,19 @@ class TestResult:
 def score_on(
     model: HysteresisModel, recordings: list[Measurement], calibration_fraction: float = 0.1
 ) -> list[TestResult]:
-    """Predict each recording from an estimated initial state (see :mod:`host.evaluate`)."""
+    """Predict each recording from an estimated initial state (see :mod:`host.evaluate`).
+
+    A recording whose output never moves is scored, with a warning: its error as a percentage
+    of the peak-to-peak output is undefined, and a flat sensor is more often unplugged than right.
+    """
+    for m in recordings:
+        if np.ptp(m.y) <= 1e-12 * max(1.0, float(np.abs(m.y).max())):
+            warnings.warn(
+                f"{m.source}: the output y is constant ({float(m.y[0]):g}), so % of peak-to-peak is undefined; "
+                "check that y is the sensor's column and that the sensor was connected",
+                ConstantOutputWarning,
+                stacklevel=2,
+            )
     return [
         TestResult(
             Path(m.source).name,

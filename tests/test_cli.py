@@ -307,3 +307,10 @@ def test_edge_telemetry_outputs_are_checked_before_reading(demo, tmp_path, optio
 def test_hil_record_shows_no_progress_in_a_pipe(tmp_path):
     result = run_pmactl("hil", "record", "--scenario", "sines", "--duration", "2", "--out", str(tmp_path / "r.csv"))
     assert result.returncode == 0 and result.stderr == "" and (tmp_path / "r.csv").exists()
+
+
+def test_a_test_record_with_a_constant_output_is_warned_about(tmp_path):
+    flat = tmp_path / "flat_y.csv"
+    flat.write_text("t,u,y\n" + "\n".join(f"{i / 100},{2 + (i % 50) / 25},5.0" for i in range(400)))
+    result = run_pmactl("fit", "--model", "pi", "--train", TRAIN, "--test", str(flat))
+    assert result.returncode == 0 and "flat_y.csv: the output y is constant (5)" in result.stderr
