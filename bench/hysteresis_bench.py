@@ -1,6 +1,6 @@
 """Benchmark of the hysteresis core: per-step cost and identification scaling.
 
-Usage: python bench/hysteresis_bench.py [--quick]
+Usage: python bench/hysteresis_bench.py [--quick] [--busy-only]
 
 Table 1: cost of one ``step()`` of each model at 25 operators (Preisach: 25 grid intervals),
 forward and inverse, for the reference model object and its lookup-table form
@@ -10,11 +10,23 @@ a random walk. Each step is timed individually with ``perf_counter_ns`` (timer o
 table, so their two rows differ only by the wrapper.
 
 Table 2: identification time against data length (10^3 .. 10^6 samples; --quick stops at
-10^5) for each estimator with its defaults, on a PI-generated signal with noise.
+10^5) for each estimator with its defaults, on a PI-generated signal with noise, wall and CPU.
+
+Table 3, the busy machine: the same fits while another CPU-bound process runs (one per
+core but one, at least one), each configuration in a fresh process with no *_NUM_THREADS in
+its environment: BLAS left at its default threads (one per core, as a user's shell has it),
+against the threads sized by ``host.identify.threads`` (what every fit does now), and the
+sized fits on the machine without the competitor as the reference. Wall and CPU seconds of
+the fit itself (``fit_seconds_``, ``fit_cpu_seconds_``); CPU far above wall means threads
+ran in parallel, wall far above CPU means the fit waited for a core. The machine is shared:
+compare the columns of one run, not runs of different days.
 """
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
 import sys
 import time
 
@@ -73,20 +85,89 @@ def step_table() -> None:
 
 def fit_table(largest: int) -> None:
     lengths = [n for n in (1_000, 10_000, 100_000, 1_000_000) if n <= largest]
-    print("\nIdentification time [s] against data length (default estimator settings)")
-    print(f"{'model':<9} " + " ".join(f"{n:>10}" for n in lengths))
+    print("\nIdentification time against data length (default estimator settings), wall / CPU [s]")
+    print(f"{'model':<9} " + " ".join(f"{n:>15}" for n in lengths))
     data = {n: training_data(n) for n in lengths}
     for name in ESTIMATORS:
         cells = []
         for n in lengths:
             u, y = data[n]
-            cells.append(make_estimator(name).fit(u, y).fit_seconds_)
-        print(f"{name:<9} " + " ".join(f"{c:>10.3f}" for c in cells))
+            estimator = make_estimator(name).fit(u, y)
+            cells.append(f"{estimator.fit_seconds_:.3f} / {estimator.fit_cpu_seconds_:.3f}")
+        print(f"{name:<9} " + " ".join(f"{c:>15}" for c in cells))
+
+
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
+BUSY_SIZES: tuple[tuple[int, dict[str, int]], ...] = (
+    (10_000, {}),
+    (100_000, {}),
+    (20_000, {"preisach": 40}),
+)  # the last: a finer Everett grid
+# Measured 2026-11-24, 2 cores, load ~6 from other jobs (``python bench/hysteresis_bench.py --busy-only``):
+# busy with BLAS default vs sized, wall / CPU [s]: dpi 10^4 4.06 / 0.90 vs 0.37 / 0.06; preisach 10^5
+# 15.1 / 3.4 vs 4.7 / 0.7; preisach with 40 intervals on 2*10^4 72.4 / 16.6 vs 7.9 / 1.1.
+
+
+def fit_worker(n: int, operators: dict[str, int]) -> None:
+    """Child process: fit every model on ``n`` samples, print wall/CPU/threads as JSON."""
+    u, y = training_data(n)
+    names = list(operators) or list(ESTIMATORS)
+    results = {}
+    for name in names:
+        estimator = make_estimator(name, operators=operators.get(name)).fit(u, y)
+        results[name] = (estimator.fit_seconds_, estimator.fit_cpu_seconds_, estimator.blas_threads_)
+    print(json.dumps(results))
+
+
+def run_worker(n: int, operators: dict[str, int], sized: bool) -> dict[str, list[float]]:
+    env = {k: v for k, v in os.environ.items() if k not in THREAD_VARIABLES}
+    if sized:
+        env.pop("PMACTL_BLAS_THREADS", None)
+    else:
+        env["PMACTL_BLAS_THREADS"] = "0"  # leave BLAS at its default: one thread per core
+    args = [sys.executable, __file__, "--fit-worker", str(n), json.dumps(operators)]
+    out = subprocess.run(args, env=env, capture_output=True, text=True, check=True).stdout
+    return json.loads(out)
+
+
+def busy_table() -> None:
+    from host.identify.threads import available_cpus
+
+    cpus = available_cpus()
+    competitors = max(1, cpus - 1)
+    print(f"\nBusy machine: {cpus} cores, {competitors} CPU-bound competitor(s); wall / CPU [s] of the fit")
+    print(f"(1-minute load average before: {os.getloadavg()[0]:.1f}; 'as found' runs without our competitor)")
+    print(
+        f"{'model':<9} {'samples':>8} {'as found, sized':>16} {'busy, BLAS default':>20} {'busy, sized':>16} "
+        f"{'threads':>8}"
+    )
+    idle = {n: run_worker(n, ops, sized=True) for n, ops in BUSY_SIZES}
+    spinners = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(competitors)]
+    try:
+        time.sleep(1.0)  # let the scheduler see them
+        default = {n: run_worker(n, ops, sized=False) for n, ops in BUSY_SIZES}
+        sized = {n: run_worker(n, ops, sized=True) for n, ops in BUSY_SIZES}
+    finally:
+        for spinner in spinners:
+            spinner.kill()
+            spinner.wait()
+    for n, _ in BUSY_SIZES:
+        for name in idle[n]:
+            cells = [f"{r[n][name][0]:.3f} / {r[n][name][1]:.3f}" for r in (idle, default, sized)]
+            print(
+                f"{name:<9} {n:>8} {cells[0]:>16} {cells[1]:>20} {cells[2]:>16} "
+                f"{int(default[n][name][2]) or 'default'!s:>4}/{int(sized[n][name][2])}"
+            )
 
 
 def main(argv: list[str]) -> int:
-    step_table()
-    fit_table(100_000 if "--quick" in argv else 1_000_000)
+    if argv[:1] == ["--fit-worker"]:
+        fit_worker(int(argv[1]), json.loads(argv[2]))
+        return 0
+    if "--busy-only" not in argv:
+        step_table()
+        fit_table(100_000 if "--quick" in argv else 1_000_000)
+    busy_table()
     return 0
 
 

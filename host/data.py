@@ -1,8 +1,13 @@
 """Measured-data CSV loader: ``t`` [s], ``u``, ``y`` plus optional ``load``, ``temperature``, ``p``.
 
-Every problem is one :class:`~edge.errors.DataError` whose message names the file, the problem
-and the fix. Irregular sampling beyond ``tolerance`` (relative spread of the time step) is
-either resampled onto a uniform grid at the median step, with a warning saying so, or refused.
+Every problem is one :class:`~edge.errors.DataError` whose message names the file, the line,
+the problem and the fix: a row with too few or too many fields, a duplicated column name, NaN or
+text in t/u/y, values too large to fit (beyond 1e100), time that does not increase, and a time
+gap of more than ``max_gap_periods`` sample periods (two recordings in one file: resampling
+across it would invent millions of samples). A UTF-8 byte-order mark (Excel's "CSV UTF-8") and
+quoted numbers are read as such. Irregular sampling beyond ``tolerance`` (relative spread of the
+time step) is either resampled onto a uniform grid at the median step, with a warning saying so,
+or refused.
 """
 
 from __future__ import annotations
@@ -20,6 +25,8 @@ from edge.errors import DataError
 
 REQUIRED = ("t", "u", "y")
 OPTIONAL = ("load", "temperature", "p")
+MAX_GAP_PERIODS = 10.0  # a longer time step is a split record, not jitter to resample over
+MAX_MAGNITUDE = 1e100  # squares and sums of a fit overflow float64 long before 1e308
 
 
 class ResampledWarning(UserWarning):
@@ -69,13 +76,93 @@ class Measurement:
 
 def _read_header(path: Path) -> list[str]:
     try:
-        with path.open(newline="") as handle:
+        with path.open(newline="", encoding="utf-8-sig") as handle:  # -sig: Excel's "CSV UTF-8" BOM
             header = next(csv.reader(handle), None)
     except (OSError, UnicodeDecodeError) as exc:
         raise DataError(f"{path}: cannot read file ({exc}); check the path and that it is a text CSV") from exc
     if not header:
         raise DataError(f"{path}: file is empty; expected a CSV header with columns t,u,y")
-    return [h.strip() for h in header]
+    columns = [h.strip() for h in header]
+    seen: dict[str, int] = {}
+    for number, name in enumerate(columns, start=1):
+        if name and name in seen:
+            raise DataError(
+                f"{path}: line 1: column {name!r} appears twice (columns {seen[name]} and {number}); "
+                "rename or delete one"
+            )
+        seen[name] = number
+    return columns
+
+
+def _read_table(path: Path, width: int) -> tuple[NDArray[np.float64], NDArray[np.int64] | None]:
+    """Numeric rows and their file line numbers; a row with the wrong number of fields is refused.
+
+    numpy's C parser reads well-formed files (quoted numbers included); anything it rejects is
+    read again row by row, so the error can name the line. Cells that are not numbers become NaN
+    (the caller refuses them in t/u/y, with their lines).
+    """
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # "input contained no data" is handled below
+            table = np.loadtxt(
+                path, delimiter=",", skiprows=1, quotechar='"', encoding="utf-8-sig", ndmin=2, comments="#"
+            )
+    except (ValueError, IndexError):
+        return _read_rows_one_by_one(path, width)
+    if table.size and table.shape[1] != width:
+        return _read_rows_one_by_one(path, width)
+    return table, None  # line numbers only when a message needs them: see _data_lines
+
+
+def _data_lines(path: Path) -> NDArray[np.int64]:
+    """File line numbers of the data rows (blank and ``#`` lines skipped, as the parser does)."""
+    with path.open(encoding="utf-8-sig") as handle:
+        next(handle, None)
+        numbers = [n for n, text in enumerate(handle, start=2) if text.strip() and not text.lstrip().startswith("#")]
+    return np.array(numbers, dtype=np.int64)
+
+
+def _read_rows_one_by_one(path: Path, width: int) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    values: list[list[float]] = []
+    lines: list[int] = []
+    with path.open(newline="", encoding="utf-8-sig") as handle:
+        reader = csv.reader(handle)
+        next(reader, None)
+        for row in reader:
+            if not row or all(not cell.strip() for cell in row) or row[0].lstrip().startswith("#"):
+                continue  # blank or comment line
+            if len(row) != width:
+                raise DataError(
+                    f"{path}: line {reader.line_num} has {len(row)} field(s) but the header has {width}; "
+                    "fix or delete that line (a cut-off or merged row?)"
+                )
+            values.append([_number(cell) for cell in row])
+            lines.append(reader.line_num)
+    return np.array(values, dtype=float).reshape(-1, width), np.array(lines, dtype=np.int64)
+
+
+def _number(cell: str) -> float:
+    try:
+        return float(cell)
+    except ValueError:
+        return float("nan")
+
+
+class _LazyLines:
+    """Row -> file line, read from the file only when an error message asks."""
+
+    def __init__(self, path: Path) -> None:
+        self._path = path
+        self._lines: NDArray[np.int64] | None = None
+
+    def __getitem__(self, row: int) -> int:
+        if self._lines is None:
+            self._lines = _data_lines(self._path)
+        return int(self._lines[row])
+
+
+def _line_list(lines: NDArray[np.int64] | _LazyLines, rows: NDArray[np.intp]) -> str:
+    return ", ".join(str(int(lines[r])) for r in rows[:5]) + (" ..." if rows.size > 5 else "")
 
 
 def load_measurement(
@@ -84,14 +171,17 @@ def load_measurement(
     irregular: Literal["resample", "refuse"] = "resample",
     tolerance: float = 0.05,
     min_samples: int = 10,
+    max_gap_periods: float = MAX_GAP_PERIODS,
 ) -> Measurement:
     """Load and validate a measured-data CSV (see module docstring).
 
     Args:
-        path: CSV file with a header row.
+        path: CSV file with a header row (UTF-8, a BOM allowed; numbers may be quoted).
         irregular: what to do with non-uniform sampling beyond ``tolerance``.
         tolerance: allowed ``(max(dt) - min(dt)) / median(dt)``.
         min_samples: fewer rows than this is an error.
+        max_gap_periods: a time step longer than this many median steps is a split record
+            (two recordings in one file), refused with its position.
     """
     path = Path(path)
     columns = _read_header(path)
@@ -101,12 +191,10 @@ def load_measurement(
             f"{path}: column(s) {', '.join(repr(m) for m in missing)} missing; found {columns}. "
             "Rename the columns to t [s], u (input), y (output)"
         )
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        table = np.genfromtxt(path, delimiter=",", skip_header=1, dtype=float, invalid_raise=False)
-    table = np.atleast_2d(table)
-    if table.size == 0 or table.shape[1] != len(columns):
-        raise DataError(f"{path}: no data rows with {len(columns)} fields; check the delimiter is ','")
+    table, parsed_lines = _read_table(path, len(columns))
+    lines = parsed_lines if parsed_lines is not None else _LazyLines(path)
+    if table.size == 0:
+        raise DataError(f"{path}: no data rows below the header; check the file is complete")
     wanted = [c for c in (*REQUIRED, *OPTIONAL) if c in columns] + [
         c for c in columns if c not in REQUIRED + OPTIONAL and c
     ]
@@ -114,10 +202,16 @@ def load_measurement(
     core = np.column_stack([data[c] for c in REQUIRED])
     bad = np.flatnonzero(~np.all(np.isfinite(core), axis=1))
     if bad.size:
-        rows = ", ".join(str(int(r) + 2) for r in bad[:5]) + (" ..." if bad.size > 5 else "")
         raise DataError(
-            f"{path}: {bad.size} row(s) with NaN, inf or non-numbers in t/u/y (file lines {rows}); "
+            f"{path}: {bad.size} row(s) with NaN, inf or non-numbers in t/u/y (file lines {_line_list(lines, bad)}); "
             "remove or interpolate them"
+        )
+    huge = np.flatnonzero(np.any(np.abs(table) > MAX_MAGNITUDE, axis=1))
+    if huge.size:
+        raise DataError(
+            f"{path}: {huge.size} row(s) with values beyond +-{MAX_MAGNITUDE:.0e} "
+            f"(file lines {_line_list(lines, huge)}); a fit squares and sums them, which overflows: "
+            "check the units or the export"
         )
     if len(core) < min_samples:
         raise DataError(f"{path}: only {len(core)} samples; need at least {min_samples}")
@@ -126,8 +220,16 @@ def load_measurement(
     if np.any(steps <= 0):
         first = int(np.argmax(steps <= 0))
         raise DataError(
-            f"{path}: time is not strictly increasing at file line {first + 3} "
+            f"{path}: time is not strictly increasing at file line {lines[first + 1]} "
             f"(t={t[first]:g} then {t[first + 1]:g}); sort the rows and drop duplicates"
+        )
+    median = float(np.median(steps))
+    gap = int(np.argmax(steps))
+    if steps[gap] > max_gap_periods * median:
+        raise DataError(
+            f"{path}: t jumps by {steps[gap]:.4g} s ({steps[gap] / median:.3g} sample periods of {median:.4g} s) "
+            f"between file lines {lines[gap]} and {lines[gap + 1]} (t={t[gap]:g} -> {t[gap + 1]:g}): "
+            "two recordings in one file; split it there and use each part on its own"
         )
     measurement = Measurement(t, data["u"], data["y"], {c: data[c] for c in wanted if c not in REQUIRED}, str(path))
     return _uniform(measurement, irregular, tolerance)

@@ -2,17 +2,26 @@
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 from edge.errors import ModelError
 from edge.hysteresis.base import HysteresisModel
 from host.data import Measurement
 from host.evaluate import Prediction, predict_unknown_start
 from host.identify import ESTIMATORS, DPIEstimator, MPIEstimator, PIEstimator, PreisachEstimator
+from host.operator_ranges import OPERATORS
 from models_export.bundle import write_bundle
 
 Estimator = PIEstimator | MPIEstimator | DPIEstimator | PreisachEstimator
+
+
+class ConstantOutputWarning(UserWarning):
+    """A held-out recording whose output y never moves."""
 
 
 def make_estimator(
@@ -24,19 +33,28 @@ def make_estimator(
 ) -> Estimator:
     """An unfitted estimator for ``model`` (``pi``, ``mpi``, ``dpi``, ``preisach``).
 
-    ``operators`` is the number of play operators / digits, or grid intervals for Preisach.
+    ``operators`` is the number of play operators / digits, or grid intervals for Preisach
+    (``None``: the model's default); outside the model's range (:data:`OPERATORS`) it is refused.
     """
     if model not in ESTIMATORS:
         raise ModelError(f"model {model!r} unknown; choose one of {', '.join(ESTIMATORS)}")
+    default, lowest, highest = OPERATORS[model]
+    if operators is None:
+        operators = default
+    elif not lowest <= operators <= highest:
+        raise ModelError(
+            f"--operators {operators} is outside {lowest}-{highest} for {model} (default {default}); "
+            "choose a count in that range"
+        )
     if model == "preisach":
-        return PreisachEstimator(n_levels=operators or 20, method=preisach_method)  # type: ignore[arg-type]
+        return PreisachEstimator(n_levels=operators, method=preisach_method)  # type: ignore[arg-type]
     if model == "pi":
-        return PIEstimator(n_operators=operators or 25, parameterisation=parameterisation)  # type: ignore[arg-type]
+        return PIEstimator(n_operators=operators, parameterisation=parameterisation)  # type: ignore[arg-type]
     if model == "mpi":
-        return MPIEstimator(n_operators=operators or 25, parameterisation=parameterisation)  # type: ignore[arg-type]
+        return MPIEstimator(n_operators=operators, parameterisation=parameterisation)  # type: ignore[arg-type]
     if parameterisation != "free":
         raise ModelError(f"--parameterisation {parameterisation} applies to the pi and mpi models only")
-    return DPIEstimator(n_operators=operators or 25)
+    return DPIEstimator(n_operators=operators)
 
 
 @dataclass
@@ -50,7 +68,19 @@ class TestResult:
 def score_on(
     model: HysteresisModel, recordings: list[Measurement], calibration_fraction: float = 0.1
 ) -> list[TestResult]:
-    """Predict each recording from an estimated initial state (see :mod:`host.evaluate`)."""
+    """Predict each recording from an estimated initial state (see :mod:`host.evaluate`).
+
+    A recording whose output never moves is scored, with a warning: its error as a percentage
+    of the peak-to-peak output is undefined, and a flat sensor is more often unplugged than right.
+    """
+    for m in recordings:
+        if np.ptp(m.y) <= 1e-12 * max(1.0, float(np.abs(m.y).max())):
+            warnings.warn(
+                f"{m.source}: the output y is constant ({float(m.y[0]):g}), so % of peak-to-peak is undefined; "
+                "check that y is the sensor's column and that the sensor was connected",
+                ConstantOutputWarning,
+                stacklevel=2,
+            )
     return [
         TestResult(
             Path(m.source).name,
@@ -82,3 +112,25 @@ def save_bundle(
     """Write the fitted model and its inverse as a bundle at ``directory``."""
     forward, inverse = rest_state(estimator.model_, float(train.u.min()))
     return write_bundle(directory, forward, inverse, units=units, fit_record=record)
+
+
+def reference_beyond_reach(
+    reference: Callable[[float], float], duration_s: float, reachable: tuple[float, float], unit: str = "mm"
+) -> str | None:
+    """A warning when ``reference`` leaves the bundle's reachable output range, else None.
+
+    The feedforward (the inverse table) clamps a set-point it cannot reach to the nearest
+    reachable one, so the excess is left to the PID and shows as tracking error at the peaks.
+    Sampled every 10 ms over ``duration_s``.
+    """
+    t = np.arange(0.0, duration_s, 0.01)
+    wanted = np.array([reference(float(ti)) for ti in t])
+    low, high = float(wanted.min()), float(wanted.max())
+    if low >= reachable[0] - 1e-9 and high <= reachable[1] + 1e-9:
+        return None
+    outside = float(np.mean((wanted < reachable[0]) | (wanted > reachable[1])))
+    return (
+        f"the reference asks {low:.1f}..{high:.1f} {unit} but the bundle reaches only "
+        f"{reachable[0]:.1f}..{reachable[1]:.1f} {unit} ({outside:.0%} of the time outside): the feedforward "
+        "clips there and the PID must do the rest; lower the amplitude or offset, or fit on data that reaches further"
+    )

@@ -83,3 +83,51 @@ def test_unreadable_file(tmp_path):
     binary.write_bytes(b"\xff\xfe\x00\x81" * 10)
     with pytest.raises(DataError):
         load_measurement(binary)
+
+
+def test_utf8_byte_order_mark_is_read_as_text(tmp_path):
+    path = tmp_path / "excel.csv"
+    path.write_bytes(b"\xef\xbb\xbf" + ("t,u,y\n" + rows()).encode())
+    m = load_measurement(path)
+    assert len(m) == 20 and m.u[1] == pytest.approx(np.sin(1 / 3), abs=1e-4)
+
+
+def test_quoted_numbers_are_numbers(tmp_path):
+    body = "\n".join('"' + line.replace(",", '","') + '"' for line in rows().splitlines())
+    m = load_measurement(write(tmp_path, '"t","u","y"\n' + body))
+    assert len(m) == 20 and np.all(np.isfinite(m.y))
+
+
+@pytest.mark.parametrize("broken, fields", [("0.05,0.1", 2), ("0.05,0.1,0.2,0.3", 4)])
+def test_a_row_with_the_wrong_field_count_is_refused_with_its_line(tmp_path, broken, fields):
+    lines = rows().splitlines()
+    lines[4] = broken
+    with pytest.raises(DataError, match=rf"line 6 has {fields} field\(s\) but the header has 3"):
+        load_measurement(write(tmp_path, "t,u,y\n" + "\n".join(lines)))
+
+
+def test_a_duplicated_column_name_is_refused(tmp_path):
+    body = "\n".join(line + ",0" for line in rows().splitlines())
+    with pytest.raises(DataError, match=r"line 1: column 'y' appears twice \(columns 3 and 4\)"):
+        load_measurement(write(tmp_path, "t,u,y,y\n" + body))
+
+
+def test_values_too_large_to_fit_are_refused_with_their_lines(tmp_path):
+    lines = rows().splitlines()
+    lines[2] = "0.0200,1e300,0.5"
+    with pytest.raises(DataError, match=r"beyond \+-1e\+100 \(file lines 4\)"):
+        load_measurement(write(tmp_path, "t,u,y\n" + "\n".join(lines)))
+
+
+def test_a_long_time_gap_is_a_split_record_refused_at_its_position(tmp_path):
+    first = [f"{i * 1e-4:.4f},{np.sin(i / 9):.4f},{np.cos(i / 9):.4f}" for i in range(50)]
+    second = [f"{1000 + i * 1e-4:.4f},{np.sin(i / 9):.4f},{np.cos(i / 9):.4f}" for i in range(50)]
+    with pytest.raises(DataError, match=r"t jumps by 1000 s .* between file lines 51 and 52 .* split it there"):
+        load_measurement(write(tmp_path, "t,u,y\n" + "\n".join(first + second)))
+
+
+def test_line_numbers_count_blank_and_comment_lines(tmp_path):
+    lines = rows().splitlines()
+    text = "t,u,y\n# exported by the rig\n" + "\n".join(lines[:3]) + "\n\n0.03,nan,1\n" + "\n".join(lines[4:])
+    with pytest.raises(DataError, match=r"file lines 7\)"):
+        load_measurement(write(tmp_path, text))

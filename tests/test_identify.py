@@ -185,3 +185,37 @@ def test_mpi_exponential_parameterisation_recovers_beta_and_mu():
     assert est.beta_ == pytest.approx(0.17, rel=0.02)
     assert est.mu_ == pytest.approx(0.6, rel=0.1)
     assert np.sqrt(np.mean((est.train_prediction_ - y) ** 2)) < 0.005 * np.ptp(y)
+
+
+def test_a_constant_output_is_refused():
+    u = signal()
+    with pytest.raises(DataError, match="output y is constant"):
+        PIEstimator().fit(u, np.full_like(u, 5.0))
+
+
+@pytest.mark.parametrize("model, operators", [("pi", 0), ("mpi", 101), ("dpi", -1), ("preisach", 1), ("preisach", 61)])
+def test_operator_counts_outside_the_stated_range_are_refused(model, operators):
+    from host.workflow import make_estimator
+
+    with pytest.raises(ModelError, match=rf"--operators {operators} is outside \d+-\d+ for {model} \(default \d+\)"):
+        make_estimator(model, operators=operators)
+
+
+def test_no_operator_count_means_the_model_default():
+    from host.workflow import make_estimator
+
+    assert make_estimator("pi").n_operators == 25 and make_estimator("preisach").n_levels == 20
+
+
+def test_a_fit_records_its_cpu_time_and_blas_threads():
+    u = signal()
+    est = PIEstimator(n_operators=8).fit(u, np.tanh(u))
+    assert est.fit_cpu_seconds_ > 0 and est.blas_threads_ == 1  # 6400 samples x 9 unknowns: one thread
+
+
+def test_blas_threads_grow_with_the_problem_but_not_past_the_cores():
+    from host.identify.threads import PARALLEL_WORK, threads_for
+
+    assert threads_for(PARALLEL_WORK / 10, cpus=8) == 1
+    assert 1 <= threads_for(PARALLEL_WORK * 100, cpus=4) <= 4
+    assert threads_for(PARALLEL_WORK * 100, cpus=1) == 1

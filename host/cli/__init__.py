@@ -13,12 +13,10 @@ import sys
 import warnings
 from collections.abc import Callable, Sequence
 
-from edge.errors import PmactlError
 from hil.effects import EFFECTS
 from hil.scenarios import SCENARIOS
-
-HOST_ONLY_MODULES = {"scipy", "matplotlib"}
-EDGE_MODULES = {"onnxruntime", "smbus2", "serial", "gpiod"}
+from host.cli.errors import OneLineParser, print_error
+from host.cli.options import add_fit_options, add_hil_options, positive_rate, version
 
 
 def _lazy(module: str, function: str = "run") -> Callable[[argparse.Namespace], int]:
@@ -37,22 +35,26 @@ def _hil_serve(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="pmactl",
         description="Pneumatic muscle actuator control: hysteresis identification, models, deployment.",
     )
+    parser.add_argument("--version", action="version", version=f"pmactl {version()}")
+    parser.add_argument("--debug", action="store_true", help="show the traceback of an error (any position)")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     demo = sub.add_parser("demo", help="identify every model on the shipped example data and compare them")
-    demo.add_argument("--out", metavar="DIR", help="keep the bundles here (default: a temporary directory)")
-    demo.add_argument("--json", action="store_true", help="print the comparison as JSON")
+    demo.add_argument(
+        "--out",
+        metavar="DIR",
+        default="pmactl-demo",
+        help="write the bundles and figures here (default: ./pmactl-demo, replaced on each run)",
+    )
+    demo.add_argument("--json", action="store_true", help="print the comparison as JSON (no progress lines)")
     demo.set_defaults(run=_lazy("host.cli.demo"))
 
     fit = sub.add_parser("fit", help="identify a hysteresis model from a measured-data CSV")
-    fit.add_argument("--model", required=True, choices=["pi", "mpi", "dpi", "preisach"])
-    fit.add_argument("--train", required=True, metavar="CSV", help="training recording (t,u,y)")
-    fit.add_argument("--test", action="append", default=[], metavar="CSV", help="held-out recording (repeatable)")
-    fit.add_argument("--operators", type=int, metavar="N", help="play operators / DPI digits / Preisach grid intervals")
+    add_fit_options(fit)
     fit.add_argument(
         "--parameterisation",
         choices=["free", "exponential"],
@@ -75,7 +77,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     fit.add_argument("--units", default="u,y", metavar="U,Y", help="units of input and output for the bundle manifest")
     fit.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
-    fit.add_argument("--save", metavar="DIR", help="write the lookup-table bundle (model + inverse) here")
+    fit.add_argument(
+        "--save", metavar="DIR", help="write the lookup-table bundle (model + inverse) here; its parent must exist"
+    )
     fit.set_defaults(run=_lazy("host.cli.fit"))
 
     diag = sub.add_parser(
@@ -108,14 +112,14 @@ def build_parser() -> argparse.ArgumentParser:
     erun.set_defaults(run=_lazy("host.cli.edge"))
     etel = edge_sub.add_parser("telemetry", help="turn a telemetry file into CSV and a plot")
     etel.add_argument("file", metavar="FILE", help="telemetry written by pmactl edge run --telemetry")
-    etel.add_argument("--csv", metavar="OUT.csv")
-    etel.add_argument("--plot", metavar="OUT.png")
+    etel.add_argument("--csv", metavar="OUT.csv", help="write every telemetry row as CSV here")
+    etel.add_argument("--plot", metavar="OUT.png", help="plot reference, output and command (.png, .pdf or .svg)")
     etel.set_defaults(run=_lazy("host.cli.edge", "telemetry"))
 
     hil = sub.add_parser("hil", help="the emulated rig: recordings with hidden effects")
     hil_sub = hil.add_subparsers(dest="hil_command", required=True, metavar="HIL_COMMAND")
     rec = hil_sub.add_parser("record", help="run a test protocol on the emulated rig and write a measured-data CSV")
-    rec.add_argument("--scenario", required=True, choices=list(SCENARIOS))
+    rec.add_argument("--scenario", required=True, choices=list(SCENARIOS), help="test protocol the rig runs")
     rec.add_argument("--seed", type=int, default=0, help="random seed (protocol details and effect parameters)")
     rec.add_argument("--duration", type=float, default=120.0, metavar="S", help="seconds of recording (default 120)")
     rec.add_argument(
@@ -124,16 +128,17 @@ def build_parser() -> argparse.ArgumentParser:
         choices=list(EFFECTS),
         help="hidden effect, parameters drawn from physical ranges (default none)",
     )
-    rec.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="sample rate, divides 1000 (default 100)")
+    rec.add_argument(
+        "--rate", type=positive_rate, default=100.0, metavar="HZ", help="sample rate, divides 1000 (default 100)"
+    )
     rec.add_argument(
         "--decoy-columns", action="store_true", help="let load and temperature columns vary without any physical effect"
     )
     rec.add_argument("--out", required=True, metavar="CSV", help="output CSV; the truth goes to <name>.truth.json")
     rec.set_defaults(run=_lazy("host.cli.hil", "run_record"))
     srv = hil_sub.add_parser("serve", help="real-time mode: serve the emulated rig's serial DAQ on a pseudo-terminal")
-    srv.add_argument("--effect", default="none", choices=list(EFFECTS))
-    srv.add_argument("--seed", type=int, default=0)
-    srv.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sample frames per second")
+    add_hil_options(srv, EFFECTS)
+    srv.add_argument("--rate", type=positive_rate, default=1000.0, metavar="HZ", help="sample frames per second")
     srv.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: until SIGTERM)")
     srv.set_defaults(run=_hil_serve)
     importlib.import_module("host.cli.bundle").register(sub)
@@ -143,28 +148,27 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``pmactl`` console script."""
-    args = build_parser().parse_args(argv)
+    """Entry point of the ``pmactl`` console script.
+
+    Whatever reaches here is one line on stderr and exit status 2 (130 on Ctrl-C); ``--debug``
+    anywhere on the line re-raises instead, with the traceback.
+    """
+    arguments = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in arguments
+    args = build_parser().parse_args([a for a in arguments if a != "--debug"])
     run: Callable[[argparse.Namespace], int] = args.run
     warnings.showwarning = _one_line_warning
     try:
         return run(args)
-    except PmactlError as exc:
-        print(f"pmactl {args.command}: error: {exc}", file=sys.stderr)
-    except ModuleNotFoundError as exc:
-        extra = "host" if exc.name in HOST_ONLY_MODULES else "edge" if exc.name in EDGE_MODULES else None
-        if extra is None:
-            raise
-        print(
-            f"pmactl {args.command}: error: needs the {extra} extra ({exc.name} is not installed); "
-            f"install it with: pip install 'pmactl[{extra}]'",
-            file=sys.stderr,
-        )
     except KeyboardInterrupt:
         print(f"pmactl {args.command}: interrupted", file=sys.stderr)
         return 130
-    return 2
+    except Exception as exc:  # noqa: BLE001 - every error is one line; --debug shows the traceback
+        if debug:
+            raise
+        print_error(args.command, exc)
+        return 2
 
 
 def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
-    print(f"pmactl: warning: {message}", file=sys.stderr)
+    print(f"pmactl: warning: {' '.join(str(message).split())}", file=sys.stderr)

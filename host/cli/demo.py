@@ -6,13 +6,18 @@ edge does (numpy only, checksums verified) and check that the lookup tables repr
 reference model and that the inverse table undoes the forward table. Then run the edge loop
 (``pmactl edge run``) on the emulated rig in lockstep with the Preisach bundle: seed 000's
 tracking test, PID alone against PID + inverse-hysteresis feedforward.
+
+Everything goes to ``--out`` (default ``./pmactl-demo``, written over on each run): a bundle per
+model, the two tracking runs' telemetry and the figures ``loops.png`` (measured vs model loops)
+and ``tracking.png`` (the closed loop). Each result is printed as it finishes.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import tempfile
+import warnings
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -21,92 +26,127 @@ from edge.control.reference import parse_reference
 from edge.runtime.bundle import load_bundle
 from edge.runtime.config import load_config
 from edge.runtime.run import EdgeRuntime
+from edge.runtime.telemetry import read_telemetry
 from hil.configs import HIL_RIG_CONFIG
-from host.data import load_measurement
+from host.cli.outputs import check_output
+from host.data import Measurement, load_measurement
+from host.demo_figures import plot_loops, plot_tracking
 from host.examples import example_path
-from host.workflow import make_estimator, rest_state, save_bundle, score_on
+from host.workflow import make_estimator, reference_beyond_reach, rest_state, save_bundle, score_on
 
 MODELS = ("pi", "mpi", "dpi", "preisach")
 TRACKING = "sine:amplitude=30,frequency=0.2,offset=40"  # seed 000 Table 4: 3 sin(2 pi 0.2 t) + 4 cm
 TRACKING_S, SETTLE_S = 25.0, 5.0
+CONTROLLERS = {"pid": "PID", "feedforward": "PID + inverse feedforward"}
 
 
-def closed_loop(bundle_dir: Path) -> list[dict[str, object]]:
+def identify(name: str, train: Measurement, test: Measurement, out: Path) -> tuple[dict[str, object], np.ndarray, int]:
+    """Fit, score, bundle, load back and check one model; the row, the test prediction, its first scored sample."""
+    estimator = make_estimator(name).fit(train.u, train.y)
+    [result] = score_on(estimator.model_, [test])
+    bundle_dir = save_bundle(estimator, train, out / name, ("bar", "mm"), {"model": name})
+    bundle = load_bundle(bundle_dir)
+    # parity: reference model vs its lookup table, both from the rest state, on the test input
+    forward, _ = rest_state(estimator.model_, float(train.u.min()))
+    reference = forward.simulate(test.u)
+    table = bundle.forward.simulate(test.u)
+    round_trip = bundle.inverse.simulate(table)
+    score = result.prediction.score
+    row = {
+        "model": name,
+        "fit_seconds": estimator.fit_seconds_,
+        "rmse_mm": score.rmse,
+        "rmse_pct_pp": score.rmse_pct_pp,
+        "max_error_mm": score.max_error,
+        "table_vs_reference_mm": float(np.abs(reference - table).max()),
+        "inverse_round_trip_bar": float(np.abs(round_trip - np.clip(test.u, *bundle.forward.input_range)).max()),
+        "input_range_bar": list(bundle.forward.input_range),
+        "bundle": str(bundle_dir),
+    }
+    return row, result.prediction.y, result.prediction.window_end
+
+
+def closed_loop(bundle_dir: Path, out: Path, say: Callable[[str], None]) -> list[dict[str, object]]:
     """Seed 000 Table 5 on the emulated rig: PID alone vs PID + feedforward (errors in mm)."""
     rows = []
-    for feedforward in (False, True):
+    for key, label in CONTROLLERS.items():
         runtime = EdgeRuntime(
             load_config(HIL_RIG_CONFIG),
             load_bundle(bundle_dir),
             parse_reference(TRACKING),
-            feedforward=feedforward,
+            feedforward=key == "feedforward",
             settle_s=SETTLE_S,
+            telemetry_path=out / f"tracking-{key}.pmt",
         )
-        summary = runtime.run(TRACKING_S).as_dict()
-        rows.append({"controller": "PID + inverse feedforward" if feedforward else "PID", **summary})
+        row = {"controller": label, **runtime.run(TRACKING_S).as_dict()}
+        faults = row["faults"]
+        assert isinstance(faults, list)
+        say(
+            f"{label:<27} {row['max_error']:>9.2f} {row['mean_abs_error']:>14.2f} {row['rms_error']:>9.2f} "
+            f"{len(faults):>7}"
+        )
+        rows.append(row)
     return rows
 
 
+def tracking_figure(out: Path, loop: list[dict[str, object]], reachable: tuple[float, float]) -> Path:
+    runs, rms = {}, {}
+    for key, row in zip(CONTROLLERS, loop):
+        record = read_telemetry(out / f"tracking-{key}.pmt")
+        runs[str(row["controller"])] = {c: record.column(c) for c in ("t", "reference_mm", "contraction_mm")}
+        rms[str(row["controller"])] = float(row["rms_error"])  # type: ignore[arg-type]
+    return plot_tracking(out / "tracking.png", runs, SETTLE_S, reachable, rms)
+
+
 def run(args: argparse.Namespace) -> int:
+    out = check_output(args.out, "--out", kind="dir")
+    out.mkdir(exist_ok=True)
+    say: Callable[[str], None] = (lambda line: None) if args.json else (lambda line: print(line, flush=True))
     train = load_measurement(example_path("train"))
     test = load_measurement(example_path("test"))
-    out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="pmactl-demo-"))
-    rows = []
-    for name in MODELS:
-        estimator = make_estimator(name).fit(train.u, train.y)
-        [result] = score_on(estimator.model_, [test])
-        bundle_dir = save_bundle(estimator, train, out / name, ("bar", "mm"), {"model": name})
-        bundle = load_bundle(bundle_dir)
-        # parity: reference model vs its lookup table, both from the rest state, on the test input
-        forward, inverse = rest_state(estimator.model_, float(train.u.min()))
-        reference = forward.simulate(test.u)
-        table = bundle.forward.simulate(test.u)
-        round_trip = bundle.inverse.simulate(table)
-        score = result.prediction.score
-        rows.append(
-            {
-                "model": name,
-                "fit_seconds": estimator.fit_seconds_,
-                "rmse_mm": score.rmse,
-                "rmse_pct_pp": score.rmse_pct_pp,
-                "max_error_mm": score.max_error,
-                "table_vs_reference_mm": float(np.abs(reference - table).max()),
-                "inverse_round_trip_bar": float(
-                    np.abs(round_trip - np.clip(test.u, *bundle.forward.input_range)).max()
-                ),
-                "bundle": str(bundle_dir),
-            }
-        )
-    loop = closed_loop(out / "preisach")
-    if args.json:
-        print(json.dumps({"train": train.source, "test": test.source, "models": rows, "closed_loop": loop}, indent=2))
-        return 0
-    print("pmactl demo: muscle pressure [bar] -> contraction [mm], example data shipped with pmactl")
-    print(f"  train: {Path(train.source).name} ({len(train)} samples: triangles 0->1,2,3,4 bar at 0.05 Hz)")
-    print(f"  test:  {Path(test.source).name} ({len(test)} samples: slow sine + faster sine, minor loops)")
-    print()
-    print(
+    say("pmactl demo: muscle pressure [bar] -> contraction [mm], example data shipped with pmactl")
+    say(f"  train: {Path(train.source).name} ({len(train)} samples: triangles 0->1,2,3,4 bar at 0.05 Hz)")
+    say(f"  test:  {Path(test.source).name} ({len(test)} samples: slow sine + faster sine, minor loops)")
+    say("")
+    say(
         f"{'model':<9} {'fit [s]':>8} {'RMSE [mm]':>10} {'% p-p':>7} {'max [mm]':>9} "
         f"{'table-ref [mm]':>15} {'inv(fwd) [bar]':>15}"
     )
-    for r in rows:
-        print(
-            f"{r['model']:<9} {r['fit_seconds']:>8.3f} {r['rmse_mm']:>10.4f} {r['rmse_pct_pp']:>7.2f} "
-            f"{r['max_error_mm']:>9.3f} {r['table_vs_reference_mm']:>15.2e} {r['inverse_round_trip_bar']:>15.2e}"
+    rows, predictions = [], {}
+    for name in MODELS:
+        row, y_hat, start = identify(name, train, test, out)
+        rows.append(row)
+        predictions[name] = (y_hat, start, float(row["rmse_pct_pp"]))  # type: ignore[arg-type]
+        say(
+            f"{name:<9} {row['fit_seconds']:>8.3f} {row['rmse_mm']:>10.4f} {row['rmse_pct_pp']:>7.2f} "
+            f"{row['max_error_mm']:>9.3f} {row['table_vs_reference_mm']:>15.2e} {row['inverse_round_trip_bar']:>15.2e}"
         )
-    print()
-    print("RMSE etc.: held-out test, after estimating its initial state and offset on its first 10 %.")
-    print("table-ref: lookup table (as the edge loads it) vs reference model; inv(fwd): inverse table")
-    print(f"applied to the forward table's output, against the input. Bundles: {out}")
-    print()
-    print(f"Closed loop on the emulated rig ({HIL_RIG_CONFIG.name}: ADS1015 + MCP4725 over I2C, 1 kHz, lockstep),")
-    print(f"tracking 30 sin(2 pi 0.2 t) + 40 mm for {TRACKING_S:g} s, scored after {SETTLE_S:g} s (pmactl edge run):")
-    print(f"{'controller':<27} {'max [mm]':>9} {'mean |e| [mm]':>14} {'RMS [mm]':>9} {'faults':>7}")
-    for r in loop:
-        print(
-            f"{r['controller']:<27} {r['max_error']:>9.2f} {r['mean_abs_error']:>14.2f} {r['rms_error']:>9.2f} "
-            f"{len(r['faults']):>7}"
-        )
-    cut = 1 - loop[1]["rms_error"] / loop[0]["rms_error"]
-    print(f"Feedforward cuts the RMS error by {cut:.0%} (seed 000 reports 48 %).")
+    loops = plot_loops(out / "loops.png", test.u, test.y, predictions)
+    say("")
+    say("RMSE etc.: held-out test, after estimating its initial state and offset on its first 10 %.")
+    say("table-ref: lookup table (as the edge loads it) vs reference model; inv(fwd): inverse table")
+    say(f"applied to the forward table's output, against the input. Measured vs model loops: {loops}")
+    say("")
+    reachable = load_bundle(out / "preisach").inverse.input_range
+    reach = reference_beyond_reach(parse_reference(TRACKING), TRACKING_S, reachable)
+    if reach:
+        warnings.warn(f"demo tracking test: {reach}", stacklevel=1)
+    say(f"Closed loop on the emulated rig ({HIL_RIG_CONFIG.name}: ADS1015 + MCP4725 over I2C, 1 kHz, lockstep),")
+    say(f"tracking 30 sin(2 pi 0.2 t) + 40 mm for {TRACKING_S:g} s, scored after {SETTLE_S:g} s (pmactl edge run):")
+    say(f"{'controller':<27} {'max [mm]':>9} {'mean |e| [mm]':>14} {'RMS [mm]':>9} {'faults':>7}")
+    loop = closed_loop(out / "preisach", out, say)
+    tracking = tracking_figure(out, loop, reachable)
+    cut = 1 - float(loop[1]["rms_error"]) / float(loop[0]["rms_error"])  # type: ignore[arg-type]
+    say(f"Feedforward cuts the RMS error by {cut:.0%} (seed 000 reports 48 %). Tracking: {tracking}")
+    say(f"Everything is in {out}/ (bundles, telemetry, figures); delete it when done.")
+    if args.json:
+        report = {
+            "train": train.source,
+            "test": test.source,
+            "models": rows,
+            "closed_loop": loop,
+            "figures": [str(loops), str(tracking)],
+            "warnings": [reach] if reach else [],
+        }
+        print(json.dumps(report, indent=2))
     return 0

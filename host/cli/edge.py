@@ -78,7 +78,12 @@ def _print_summary(result: dict[str, object]) -> None:
 
 def telemetry(args: argparse.Namespace) -> int:
     from edge.runtime.telemetry import read_telemetry
+    from host.cli.outputs import FIGURE_SUFFIXES, check_output
 
+    if args.csv:
+        check_output(args.csv, "--csv")
+    if args.plot:
+        check_output(args.plot, "--plot", suffixes=FIGURE_SUFFIXES)
     record = read_telemetry(args.file)
     columns = list(record.header["columns"])  # type: ignore[call-overload]
     if args.csv:

@@ -7,8 +7,10 @@ import json
 from pathlib import Path
 
 from edge.errors import DataError
+from host.cli.outputs import check_output
 from host.data import load_measurement
-from host.workflow import make_estimator, save_bundle, score_on
+from host.progress import Steps, wanted
+from host.workflow import Estimator, TestResult, make_estimator, save_bundle, score_on
 
 
 def parse_units(text: str) -> tuple[str, str]:
@@ -18,24 +20,15 @@ def parse_units(text: str) -> tuple[str, str]:
     return parts[0], parts[1]
 
 
-def run(args: argparse.Namespace) -> int:
-    units = parse_units(args.units)
-    if not 0 < args.calibration < 0.9:
-        raise DataError(f"--calibration {args.calibration} must be between 0 and 0.9")
-    train = load_measurement(args.train)
-    tests = [load_measurement(path) for path in args.test]
-    estimator = make_estimator(
-        args.model,
-        operators=args.operators,
-        parameterisation=args.parameterisation,
-        preisach_method=args.preisach_method,
-    ).fit(train.u, train.y)
-    results = score_on(estimator.model_, tests, args.calibration)
-    record = {
+def fit_record(args: argparse.Namespace, samples: int, estimator: Estimator, results: list[TestResult]) -> dict:
+    """What the bundle's manifest keeps about the fit."""
+    return {
         "model": args.model,
         "train": Path(args.train).name,
-        "samples": len(train),
+        "samples": samples,
         "fit_seconds": estimator.fit_seconds_,
+        "fit_cpu_seconds": estimator.fit_cpu_seconds_,
+        "blas_threads": estimator.blas_threads_,
         "memory_known_from_sample": estimator.start_index_,
         "options": {
             "operators": args.operators,
@@ -44,8 +37,34 @@ def run(args: argparse.Namespace) -> int:
         },
         "tests": [{"file": r.name, **r.prediction.score.as_dict()} for r in results],
     }
+
+
+def run(args: argparse.Namespace) -> int:
+    units = parse_units(args.units)
+    if not 0 < args.calibration < 0.9:
+        raise DataError(f"--calibration {args.calibration} must be between 0 and 0.9")
     if args.save:
-        save_bundle(estimator, train, args.save, units, record)
+        check_output(args.save, "--save", kind="dir")
+    estimator = make_estimator(
+        args.model,
+        operators=args.operators,
+        parameterisation=args.parameterisation,
+        preisach_method=args.preisach_method,
+    )
+    with Steps(3 + len(args.test) + bool(args.save), wanted(args.json), f"pmactl fit {args.model}") as steps:
+        steps.start(f"reading {Path(args.train).name}")
+        train = load_measurement(args.train)
+        tests = []
+        for path in args.test:
+            steps.start(f"reading {Path(path).name}")
+            tests.append(load_measurement(path))
+        steps.start(f"fitting on {len(train)} samples")
+        estimator.fit(train.u, train.y)
+        steps.start("scoring")
+        results = score_on(estimator.model_, tests, args.calibration)
+        if args.save:
+            steps.start("writing the bundle")
+            save_bundle(estimator, train, args.save, units, fit_record(args, len(train), estimator, results))
     if args.json:
         print(
             json.dumps(

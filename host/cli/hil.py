@@ -6,18 +6,24 @@ import argparse
 
 from edge.errors import DataError
 from hil.record import record, truth_path, write_recording
+from host.cli.outputs import check_output
+from host.progress import Steps, wanted
 
 
 def run_record(args: argparse.Namespace) -> int:
     if not 1.0 <= args.duration <= 24 * 3600:
         raise DataError(f"--duration {args.duration} s is outside 1 s .. 24 h")
-    try:
-        recording = record(
-            args.scenario, args.seed, args.duration, args.effect, args.rate, decoy_columns=args.decoy_columns
-        )
-    except ValueError as exc:
-        raise DataError(str(exc)) from exc
-    path = write_recording(recording, args.out)
+    check_output(args.out, "--out")
+    with Steps(2, wanted(False), "pmactl hil record") as steps:
+        steps.start(f"running {args.duration:g} s of {args.scenario} (about {args.duration / 110:.0f} s)")
+        try:
+            recording = record(
+                args.scenario, args.seed, args.duration, args.effect, args.rate, decoy_columns=args.decoy_columns
+            )
+        except ValueError as exc:
+            raise DataError(str(exc)) from exc
+        steps.start(f"writing {args.out}")
+        path = write_recording(recording, args.out)
     print(
         f"wrote {path} ({recording.t.size} samples at {args.rate:g} Hz, scenario {args.scenario}, "
         f"effect {args.effect}) and {truth_path(path).name}"

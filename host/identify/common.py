@@ -13,6 +13,7 @@ from scipy.optimize import lsq_linear
 
 from edge.errors import DataError, ModelError
 from edge.hysteresis.base import Branch, HysteresisModel, as_signal
+from host.identify.threads import blas_threads
 
 
 @dataclass(frozen=True)
@@ -52,6 +53,11 @@ def training_signals(
         raise DataError(f"only {u_arr.size} training samples; need at least {min_samples}")
     if np.ptp(u_arr) <= 1e-12 * max(1.0, float(np.abs(u_arr).max())):
         raise DataError("the input u is constant; hysteresis needs a moving input to identify")
+    if np.ptp(y_arr) <= 1e-12 * max(1.0, float(np.abs(y_arr).max())):
+        raise DataError(
+            f"the output y is constant ({float(y_arr[0]):g} throughout) while u moves: nothing to identify; "
+            "check that y is the sensor's column and that the sensor was connected"
+        )
     return u_arr, y_arr
 
 
@@ -94,20 +100,27 @@ class HysteresisEstimator(abc.ABC):
 
     Learned attributes: ``model_`` (the forward model, left in the state it ends the training
     data in), ``train_prediction_`` (its output from ``start_index_`` on), ``start_index_`` and
-    ``start_branch_`` (see :class:`MemoryStart`), ``fit_seconds_``.
+    ``start_branch_`` (see :class:`MemoryStart`), ``fit_seconds_`` (wall) and
+    ``fit_cpu_seconds_`` (this process's CPU time), ``blas_threads_`` (the BLAS threads the fit
+    ran with, sized to the problem by :mod:`host.identify.threads`; 0: left at BLAS's default).
     """
 
     def fit(self, u: ArrayLike, y: ArrayLike) -> Self:
         u_arr, y_arr = training_signals(u, y)
-        with Stopwatch() as watch:
+        with Stopwatch() as watch, blas_threads(u_arr.size * self._parameter_count() ** 2) as threads:
             start = memory_start(u_arr)
             model = self._identify(u_arr, y_arr, start)
             model.reset(float(u_arr[start.index]), start.branch)
             self.train_prediction_ = model.simulate(u_arr[start.index :])
         self.model_ = model
         self.start_index_, self.start_branch_ = start.index, start.branch
-        self.fit_seconds_ = watch.seconds
+        self.fit_seconds_, self.fit_cpu_seconds_ = watch.seconds, watch.cpu_seconds
+        self.blas_threads_ = threads
         return self
+
+    @abc.abstractmethod
+    def _parameter_count(self) -> int:
+        """Unknowns of the largest least-squares problem (sizes the BLAS threads)."""
 
     @abc.abstractmethod
     def _identify(self, u: NDArray[np.float64], y: NDArray[np.float64], start: MemoryStart) -> HysteresisModel:
@@ -115,12 +128,18 @@ class HysteresisEstimator(abc.ABC):
 
 
 class Stopwatch:
-    """Measures the wall time of a fit: ``with Stopwatch() as sw: ...; sw.seconds``."""
+    """Wall and process CPU time of a block: ``with Stopwatch() as sw: ...; sw.seconds, sw.cpu_seconds``.
+
+    CPU time counts every thread of this process, so CPU > wall means BLAS threads ran in
+    parallel, and CPU << wall on a busy machine means the fit waited for a core.
+    """
 
     def __enter__(self) -> Stopwatch:
         self._start = time.perf_counter()
-        self.seconds = 0.0
+        self._cpu_start = time.process_time()
+        self.seconds = self.cpu_seconds = 0.0
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.seconds = time.perf_counter() - self._start
+        self.cpu_seconds = time.process_time() - self._cpu_start

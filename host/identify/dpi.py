@@ -33,7 +33,7 @@ def digit_fills(u: NDArray[np.float64], dx: float, n: int, start: MemoryStart) -
     The equivalent PI model has ``n + 1`` plays centred on the input range; the last one
     (threshold = half the range) never moves inside the range and starts centred.
     """
-    thresholds = np.arange(n + 1) * dx / 2.0
+    thresholds = np.arange(n + 1, dtype=np.float64) * (dx / 2.0)
     x = u - (float(u.min()) + n * dx / 2.0)
     z0 = branch_play_state(float(x[start.index]), thresholds, start.branch)
     z0[-1] = 0.0
@@ -73,6 +73,9 @@ class DPIEstimator(HysteresisEstimator):
         self.n_operators = n_operators
         self.closure_weight = closure_weight
         self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
+
+    def _parameter_count(self) -> int:
+        return 2 * self.n_operators + 1
 
     def _identify(self, u: NDArray[np.float64], y: NDArray[np.float64], start: MemoryStart) -> DPIModel:
         n = self.n_operators

@@ -64,6 +64,9 @@ class PIEstimator(HysteresisEstimator):
         self.parameterisation = parameterisation
         self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
 
+    def _parameter_count(self) -> int:
+        return self.n_operators + 1
+
     def _identify(self, u: NDArray[np.float64], y: NDArray[np.float64], start: MemoryStart) -> PIModel:
         target = y[start.index :]
         if self.parameterisation == "free":
@@ -117,7 +120,7 @@ def exponential_search(
     beta_max = float(np.ptp(u)) / 2.0 / (n - 1)  # largest threshold at half the input range
 
     def profile(beta: float) -> tuple[float, float]:
-        thresholds = beta * np.arange(n)
+        thresholds = beta * np.arange(n, dtype=np.float64)
         plays = start_plays(u, thresholds, start)
         span = 8.0 / thresholds[-1]
         search = minimize_scalar(

@@ -193,6 +193,9 @@ class PreisachEstimator(HysteresisEstimator):
         self.capacity = capacity
         self.min_slope_ratio = check_slope_ratio(min_slope_ratio)
 
+    def _parameter_count(self) -> int:
+        return self.n_levels * (self.n_levels + 1) // 2 + 1
+
     def _identify(self, u: NDArray[np.float64], y: NDArray[np.float64], start: MemoryStart) -> PreisachModel:
         target = y[start.index :]
         grid = EverettGrid(float(u.min()), float(u.max()), self.n_levels)

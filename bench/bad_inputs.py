@@ -1,0 +1,178 @@
+"""Try bad inputs as a new user would and count how pmactl answers them.
+
+Usage: python bench/bad_inputs.py [--show]
+
+Every case runs ``pmactl`` as a separate process (``python -m host.cli``) in a scratch
+directory. A case that should be refused passes when it exits with status 2 and exactly one
+line on stderr (warnings apart) and no traceback; a case that should be accepted (a UTF-8 BOM,
+quoted numbers) passes when it exits 0. The table prints each case's outcome, then the counts:
+one-line errors, tracebacks, other refusals (exit 2 but several lines), silent accepts of bad
+input, hangs (over the time limit). ``--show`` also prints each case's stderr.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+TIME_LIMIT_S = 60.0
+
+
+@dataclass
+class Case:
+    name: str
+    args: list[str]
+    expect: str = "error"  # "error" (one line, exit 2) or "ok" (exit 0)
+
+
+def write_csv(path: Path, header: str, rows: list[str], prefix: bytes = b"") -> str:
+    path.write_bytes(prefix + (header + "\n" + "\n".join(rows) + "\n").encode())
+    return str(path)
+
+
+def triangle_rows(n: int = 400, dt: float = 0.01, fmt: str = "{t:.4f},{u:.5f},{y:.5f}") -> list[str]:
+    t = np.arange(n) * dt
+    u = 2.0 + 2.0 * np.abs(((t / 2.0) % 2.0) - 1.0) * np.sign(np.sin(0.3 * t) + 2)
+    y = 10 * np.tanh(u / 2) + 0.3 * np.sin(np.arange(n) / 7)
+    return [fmt.format(t=a, u=b, y=c) for a, b, c in zip(t, u, y)]
+
+
+def build_cases(root: Path) -> list[Case]:
+    good = triangle_rows()
+    csv = {
+        "good": write_csv(root / "good.csv", "t,u,y", good),
+        "bom": write_csv(root / "bom.csv", "t,u,y", good, prefix=b"\xef\xbb\xbf"),
+        "quoted": write_csv(root / "quoted.csv", '"t","u","y"', ['"' + r.replace(",", '","') + '"' for r in good]),
+        "short_row": write_csv(root / "short.csv", "t,u,y", good[:50] + ["0.5,1.0"] + good[51:]),
+        "long_row": write_csv(root / "long.csv", "t,u,y", good[:50] + [good[50] + ",7"] + good[51:]),
+        "duplicate_column": write_csv(root / "dup.csv", "t,u,y,y", [r + ",0" for r in good]),
+        "huge_values": write_csv(
+            root / "huge.csv",
+            "t,u,y",
+            [r.rsplit(",", 1)[0] + ",1e300" for r in good[:1]]
+            + [f"{r.rsplit(',', 1)[0]},{1e300 * (1 + i % 3)}" for i, r in enumerate(good[1:])],
+        ),
+        "gap_1000s": write_csv(
+            root / "gap.csv",
+            "t,u,y",
+            [f"{i * 1e-4:.4f},{np.sin(i / 30):.4f},{np.sin(i / 30 - 0.2):.4f}" for i in range(2000)]
+            + [f"{1000 + i * 1e-4:.4f},{np.sin(i / 30):.4f},{np.sin(i / 30 - 0.2):.4f}" for i in range(2000)],
+        ),
+        "constant_output": write_csv(root / "const.csv", "t,u,y", [r.rsplit(",", 1)[0] + ",5.0" for r in good]),
+        "text_cells": write_csv(root / "text.csv", "t,u,y", good[:10] + ["0.1,abc,1"] + good[11:]),
+        "semicolons": write_csv(root / "semi.csv", "t;u;y", [r.replace(",", ";") for r in good]),
+        "empty": write_csv(root / "empty.csv", "", []),
+    }
+    (root / "binary.csv").write_bytes(bytes(range(256)) * 20)
+    # a directory nobody may write into, root included (chmod does not stop root)
+    readonly = Path("/sys") if os.geteuid() == 0 else root / "readonly"
+    if readonly != Path("/sys"):
+        readonly.mkdir()
+        os.chmod(readonly, stat.S_IRUSR | stat.S_IXUSR)
+    fit = ["fit", "--model", "pi", "--train"]
+    cases = [
+        Case(f"csv {name}", [*fit, path], "ok" if name in {"good", "bom", "quoted"} else "error")
+        for name, path in csv.items()
+    ]
+    cases += [
+        Case("csv missing file", [*fit, str(root / "absent.csv")]),
+        Case("csv is a directory", [*fit, str(root)]),
+        Case("csv binary", [*fit, str(root / "binary.csv")]),
+        Case("test csv broken", [*fit, csv["good"], "--test", csv["short_row"]]),
+        Case("--operators 0", [*fit, csv["good"], "--operators", "0"]),
+        Case("--operators -3", [*fit, csv["good"], "--operators", "-3"]),
+        Case("--operators 100000", [*fit, csv["good"], "--operators", "100000"]),
+        Case(
+            "preisach --operators 100000",
+            ["fit", "--model", "preisach", "--train", csv["good"], "--operators", "100000"],
+        ),
+        Case("--operators abc", [*fit, csv["good"], "--operators", "abc"]),
+        Case("--calibration 5", [*fit, csv["good"], "--test", csv["good"], "--calibration", "5"]),
+        Case("--units bar", [*fit, csv["good"], "--units", "bar"]),
+        Case("--model foo", ["fit", "--model", "foo", "--train", csv["good"]]),
+        Case("fit without --train", ["fit", "--model", "pi"]),
+        Case("--save in missing dir", [*fit, csv["good"], "--save", str(root / "no" / "such" / "bundle")]),
+        Case("--save in read-only dir", [*fit, csv["good"], "--save", str(readonly / "bundle")]),
+        Case("--save onto a file", [*fit, csv["good"], "--save", csv["good"]]),
+        Case(
+            "hil record --rate 0",
+            ["hil", "record", "--scenario", "sines", "--duration", "2", "--rate", "0", "--out", str(root / "r.csv")],
+        ),
+        Case(
+            "hil record --rate -100",
+            ["hil", "record", "--scenario", "sines", "--duration", "2", "--rate", "-100", "--out", str(root / "r.csv")],
+        ),
+        Case(
+            "hil record --rate 333",
+            ["hil", "record", "--scenario", "sines", "--duration", "2", "--rate", "333", "--out", str(root / "r.csv")],
+        ),
+        Case(
+            "hil record --out missing dir",
+            ["hil", "record", "--scenario", "sines", "--duration", "2", "--out", str(root / "no" / "r.csv")],
+        ),
+        Case(
+            "hil record --out read-only",
+            ["hil", "record", "--scenario", "sines", "--duration", "2", "--out", str(readonly / "r.csv")],
+        ),
+        Case("demo --out in missing dir", ["demo", "--out", str(root / "no" / "such" / "demo")]),
+        Case("demo --out read-only", ["demo", "--out", str(readonly / "demo")]),
+        Case("demo --out onto a file", ["demo", "--out", csv["good"]]),
+        Case("unknown command", ["fitt"]),
+        Case("no command", []),
+    ]
+    return cases
+
+
+def run_case(case: Case, cwd: Path) -> tuple[str, str]:
+    try:
+        result = subprocess.run(
+            [sys.executable, "-m", "host.cli", *case.args],
+            capture_output=True,
+            text=True,
+            timeout=TIME_LIMIT_S,
+            cwd=cwd,
+        )
+    except subprocess.TimeoutExpired:
+        return "hang", f"over {TIME_LIMIT_S:g} s"
+    lines = [line for line in result.stderr.splitlines() if line.strip() and "warning:" not in line]
+    if "Traceback" in result.stderr:
+        return "traceback", result.stderr
+    if case.expect == "ok":
+        return ("pass" if result.returncode == 0 else "refused good input"), result.stderr
+    if result.returncode == 0:
+        return "silently accepted", result.stderr
+    if result.returncode == 2 and len(lines) == 1:
+        return "one-line error", result.stderr
+    return "unclear error", result.stderr
+
+
+def main(argv: list[str]) -> int:
+    show = "--show" in argv
+    counts: dict[str, int] = {}
+    with tempfile.TemporaryDirectory(prefix="pmactl-bad-inputs-") as tmp:
+        root = Path(tmp)
+        cases = build_cases(root)
+        print(f"{'case':<34} outcome")
+        for case in cases:
+            outcome, stderr = run_case(case, root)
+            counts[outcome] = counts.get(outcome, 0) + 1
+            print(f"{case.name:<34} {outcome}")
+            if show and stderr.strip():
+                print("    " + "\n    ".join(stderr.strip().splitlines()[-3:]))
+        if (root / "readonly").exists():
+            os.chmod(root / "readonly", stat.S_IRWXU)
+    print()
+    print(f"{len(cases)} cases: " + ", ".join(f"{n} {k}" for k, n in sorted(counts.items(), key=lambda kv: -kv[1])))
+    good = counts.get("one-line error", 0) + counts.get("pass", 0)
+    return 0 if good == len(cases) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv[1:]))
