@@ -111,7 +111,9 @@ def save_bundle(
 ) -> Path:
     """Write the fitted model and its inverse as a bundle at ``directory``."""
     forward, inverse = rest_state(estimator.model_, float(train.u.min()))
-    return write_bundle(directory, forward, inverse, units=units, fit_record=record)
+    source = Path(train.source)
+    training_data = [source] if source.is_file() else []
+    return write_bundle(directory, forward, inverse, units=units, fit_record=record, training_data=training_data)
 
 
 def reference_beyond_reach(

@@ -19,7 +19,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     sign.add_argument("--key", required=True, metavar="KEY", help="pmactl.key from pmactl keygen")
     sign.set_defaults(run=run_sign)
     verify = bundle_sub.add_parser("verify", help="check signature, checksums, roles and golden vectors")
-    verify.add_argument("directory", metavar="DIR")
+    verify.add_argument("directory", metavar="DIR", help="bundle directory (or one release)")
     verify.add_argument(
         "--trusted",
         action="extend",
@@ -32,7 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     inspect = bundle_sub.add_parser(
         "inspect", help="what a bundle holds: model, units, ranges, files, signer, provenance"
     )
-    inspect.add_argument("directory", metavar="DIR")
+    inspect.add_argument("directory", metavar="DIR", help="bundle directory (or one release)")
     inspect.add_argument("--json", action="store_true", help="print one JSON object")
     inspect.set_defaults(run=run_inspect)
 

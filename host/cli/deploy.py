@@ -28,13 +28,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     rollback = sub.add_parser("rollback", help="switch a rig back to its previous release (checked first)")
     rollback.add_argument("target", metavar="TARGET", help=TARGET_HELP)
     _common(rollback)
-    rollback.add_argument("--json", action="store_true")
+    rollback.add_argument("--json", action="store_true", help="print the outcome as one JSON object")
     rollback.set_defaults(run=run_rollback)
 
     releases = sub.add_parser("releases", help="list the releases on a rig and which one is current")
     releases.add_argument("target", metavar="TARGET", help=TARGET_HELP)
     releases.add_argument("--remote-python", default="python3", metavar="PATH", help="Python with pmactl on the target")
-    releases.add_argument("--json", action="store_true")
+    releases.add_argument("--json", action="store_true", help="print the releases as one JSON object")
     releases.set_defaults(run=run_releases)
 
 

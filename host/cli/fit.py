@@ -11,6 +11,7 @@ from host.cli.outputs import check_output
 from host.data import load_measurement
 from host.progress import Steps, wanted
 from host.workflow import Estimator, TestResult, make_estimator, save_bundle, score_on
+from models_export.bundle import check_save_target
 
 
 def parse_units(text: str) -> tuple[str, str]:
@@ -45,6 +46,7 @@ def run(args: argparse.Namespace) -> int:
         raise DataError(f"--calibration {args.calibration} must be between 0 and 0.9")
     if args.save:
         check_output(args.save, "--save", kind="dir")
+        check_save_target(args.save)  # a foreign directory is refused before the fit, not after
     estimator = make_estimator(
         args.model,
         operators=args.operators,
