@@ -94,6 +94,31 @@ def mixed(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarra
     return np.concatenate(pieces)[: int(round(duration_s / dt_s))]
 
 
+STEPPED_SINE_FREQUENCIES_HZ = (0.1, 0.2, 0.35, 0.6, 1.0, 1.7, 3.0)
+
+
+def stepped_sine(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Seed 004's frequency response: sinusoids of 0.6 bar around 2 bar, one frequency after another.
+
+    Frequencies :data:`STEPPED_SINE_FREQUENCIES_HZ` in ascending order, each for an equal share of
+    the duration in whole cycles (at least 3: one to settle, two to analyse), each starting and
+    ending at the offset so the command never steps. The amplitude varies by +-10 % with the seed.
+    The fastest segment asks 11 bar/s of the valve, below its 40 bar/s rate limit.
+    """
+    offset, amplitude = 2.0, 0.6 * float(rng.uniform(0.9, 1.1))
+    share = duration_s / len(STEPPED_SINE_FREQUENCIES_HZ)
+    pieces = []
+    for frequency in STEPPED_SINE_FREQUENCIES_HZ:
+        cycles = max(3, int(share * frequency))
+        local = np.arange(int(round(cycles / frequency / dt_s))) * dt_s
+        pieces.append(offset + amplitude * np.sin(2 * np.pi * frequency * local))
+    sequence = np.concatenate(pieces)
+    steps = int(round(duration_s / dt_s))
+    if sequence.size < steps:
+        sequence = np.concatenate([sequence, np.full(steps - sequence.size, offset)])
+    return sequence[:steps]
+
+
 SCENARIOS: dict[str, Scenario] = {
     "triangles": triangles,
     "sines": sines,
@@ -101,4 +126,5 @@ SCENARIOS: dict[str, Scenario] = {
     "holds": holds,
     "forc": forc,
     "mixed": mixed,
+    "stepped-sine": stepped_sine,
 }

@@ -136,6 +136,7 @@ def build_parser() -> argparse.ArgumentParser:
     srv.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sample frames per second")
     srv.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: until SIGTERM)")
     srv.set_defaults(run=_hil_serve)
+    importlib.import_module("host.cli.identify").register(sub)
     return parser
 
 
