@@ -51,7 +51,9 @@ def equivalent_fotd(params: PlantParams, pressure_bar: float = 2.0, amplitude_ba
     gain = (top - bottom) / 2.0 / amplitude_bar * 1e3
     x0 = _contraction_m(params, pressure_bar, 0.0)
     h = 1e-6
-    slope = (muscle_force_n(params, pressure_bar, x0 + h, 22.0) - muscle_force_n(params, pressure_bar, x0 - h, 22.0)) / (2 * h)
+    slope = (
+        muscle_force_n(params, pressure_bar, x0 + h, 22.0) - muscle_force_n(params, pressure_bar, x0 - h, 22.0)
+    ) / (2 * h)
     mechanical = params.damping_n_s_per_m / (params.spring_n_per_m - slope)
     dead = params.dead_time_s + params.dt_s + mechanical / 2.0
     return EquivalentFOTD(gain, params.valve_time_constant_s + mechanical / 2.0, dead, mechanical)

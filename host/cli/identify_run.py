@@ -25,7 +25,9 @@ def read_columns(path: str | Path, wanted: list[str]) -> dict[str, NDArray[np.fl
         raise DataError(f"{path}: cannot read file ({exc}); check the path and that it is a text CSV") from exc
     missing = [c for c in wanted if c not in header]
     if missing:
-        raise DataError(f"{path}: column(s) {', '.join(missing)} missing; found {header}. Rename or pass the column option")
+        raise DataError(
+            f"{path}: column(s) {', '.join(missing)} missing; found {header}. Rename or pass the column option"
+        )
     table = np.atleast_2d(np.genfromtxt(path, delimiter=",", skip_header=1, dtype=float))
     if table.size == 0 or table.shape[1] != len(header):
         raise DataError(f"{path}: no data rows with {len(header)} fields; check the delimiter is ','")
@@ -72,7 +74,8 @@ def run_fotd(args: argparse.Namespace) -> int:
             g = complex(fit.response(h.frequency_hz))
             print(
                 f"  {h.frequency_hz:8.3f} {h.periods:7d} {h.output_mean:9.4g} {h.input_amplitude:8.4g} "
-                f"{h.output_amplitude:8.4g} {h.gain:8.4g} {math.degrees(h.phase_rad):7.1f}+-{math.degrees(h.phase_se_rad):<4.1f}"
+                f"{h.output_amplitude:8.4g} {h.gain:8.4g} "
+                f"{math.degrees(h.phase_rad):7.1f}+-{math.degrees(h.phase_se_rad):<4.1f}"
                 f" {math.degrees(h.loss_angle_rad):10.1f} {abs(g):9.4g} {math.degrees(np.angle(g)):9.1f}"
             )
     for note in fit.notes:

@@ -111,7 +111,9 @@ class FOTDFit:
         }
 
 
-def fotd_response(omega: NDArray[np.float64], gain: float, time_constant_s: float, dead_time_s: float) -> NDArray[np.complex128]:
+def fotd_response(
+    omega: NDArray[np.float64], gain: float, time_constant_s: float, dead_time_s: float
+) -> NDArray[np.complex128]:
     """``K e^{-j w L} / (1 + j w T)`` at angular frequencies ``omega`` [rad/s]."""
     return gain * np.exp(-1j * omega * dead_time_s) / (1.0 + 1j * omega * time_constant_s)
 
@@ -133,7 +135,8 @@ def fit_frequency_response(harmonics: list[Harmonic], hysteresis_phase: bool = T
     needed = 2
     if len(frequencies) < needed:
         raise DataError(
-            f"found sinusoids at {len(frequencies)} frequency ({', '.join(f'{f:g} Hz' for f in frequencies) or 'none'}); "
+            f"found sinusoids at {len(frequencies)} frequency "
+            f"({', '.join(f'{f:g} Hz' for f in frequencies) or 'none'}); "
             f"K, T and L need at least {needed} frequencies: record a stepped sine "
             "(pmactl hil record --scenario stepped-sine), pass one run per frequency, or use --method time"
         )
@@ -227,9 +230,7 @@ def fit_time_response(records: list[Measurement]) -> FOTDFit:
 
     def residuals(theta: NDArray[np.float64]) -> NDArray[np.float64]:
         K, T, L = theta[:3]
-        return np.concatenate(
-            [simulate_fotd(m.t, m.u, K, T, L) + theta[3 + i] - m.y for i, m in enumerate(records)]
-        )
+        return np.concatenate([simulate_fotd(m.t, m.u, K, T, L) + theta[3 + i] - m.y for i, m in enumerate(records)])
 
     slope = np.polyfit(np.concatenate([m.u for m in records]), np.concatenate([m.y for m in records]), 1)[0]
     lower = [-np.inf, 0.0, 0.0] + [-np.inf] * count
@@ -259,7 +260,9 @@ def fit_time_response(records: list[Measurement]) -> FOTDFit:
             f"{' and '.join(unresolved)} below two sample periods ({2 * dt:.3g} s): the data cannot resolve "
             "them; read them as upper bounds"
         )
-    return FOTDFit(K, T, L, float(se[0]), float(se[1]), float(se[2]), "time", float(np.sqrt(np.mean(r**2))), notes=notes)
+    return FOTDFit(
+        K, T, L, float(se[0]), float(se[1]), float(se[2]), "time", float(np.sqrt(np.mean(r**2))), notes=notes
+    )
 
 
 def identify_fotd(records: list[Measurement], method: Method = "auto", hysteresis_phase: bool = True) -> FOTDFit:
@@ -277,8 +280,8 @@ def identify_fotd(records: list[Measurement], method: Method = "auto", hysteresi
         fit = fit_time_response(records)
         fit.notes.insert(
             0,
-            f"no stepped sine found (steady sinusoids at {len(distinct)} frequenc{'y' if len(distinct) == 1 else 'ies'}, "
-            "K, T, L need 2); fell back to the step / ramp response fit",
+            f"no stepped sine found (steady sinusoids at {len(distinct)} frequency/ies, K, T, L need 2); "
+            "fell back to the step / ramp response fit",
         )
         return fit
     return fit_frequency_response(found, hysteresis_phase)

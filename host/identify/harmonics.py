@@ -174,6 +174,7 @@ def harmonic(
     U, cov_u, u_mean, _, _ = fourier_fit(tw, uw, omega)
     Y, cov_y, y_mean, distortion, _ = fourier_fit(tw, yw, omega)
     G = Y / U
+
     # delta method: dG/dY = 1/U, dG/dU = -G/U, written on (Re, Im) pairs as 2x2 real matrices
     def as_matrix(z: complex) -> NDArray[np.float64]:
         return np.array([[z.real, -z.imag], [z.imag, z.real]])
@@ -192,9 +193,9 @@ def harmonic(
         input_mean=u_mean,
         output_mean=y_mean,
         gain=gain,
-        gain_se=float(np.sqrt(max(d_gain @ cov_g @ d_gain, 0.0))),
+        gain_se=float(np.sqrt(max(float(d_gain @ cov_g @ d_gain), 0.0))),
         phase_rad=phase,
-        phase_se_rad=float(np.sqrt(max(d_phase @ cov_g @ d_phase, 0.0))),
+        phase_se_rad=float(np.sqrt(max(float(d_phase @ cov_g @ d_phase), 0.0))),
         loss_angle_rad=_loss_angle(uw, yw, abs(U), abs(Y), periods),
         distortion=distortion,
     )
