@@ -222,6 +222,16 @@ def output(t: float, x: PlantState, params: PlantParams) -> Outputs:
     return Outputs((x.contraction_m - x.creep_m) * 1e3, x.pressure_bar, params.load.at(t), params.temperature.at(t))
 
 
+def tendon_force_n(t: float, x: PlantState, params: PlantParams) -> float:
+    """What a load cell in series with the muscle reads [N]: the weight, the spring and the damper.
+
+    Equal to the static muscle force minus the braid friction (the friction is inside the muscle).
+    """
+    return (
+        params.load.at(t) * GRAVITY + params.spring_n_per_m * x.contraction_m + params.damping_n_s_per_m * x.speed_m_s
+    )
+
+
 def simulate(
     commands_bar: np.ndarray, params: PlantParams, x0: PlantState | None = None
 ) -> tuple[np.ndarray, PlantState]:

@@ -119,6 +119,36 @@ def stepped_sine(duration_s: float, dt_s: float, rng: np.random.Generator) -> np
     return sequence[:steps]
 
 
+def isotonic(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Static force map: slow triangles 0.3 -> 5.5 -> 0.3 bar, ten over the duration (at least 40 s each).
+
+    Quasi-static (0.26 bar/s at 400 s), so the load cell reads the muscle's static force minus its
+    braid friction. With ``--effect load_dependence`` the load steps through seed 000's five masses,
+    two triangles per mass: isotonic curves at five forces, the data a static force law is fitted on.
+    """
+    t = _time(duration_s, dt_s)
+    period = max(40.0, duration_s / 10.0)
+    return 0.3 + 5.2 * (1.0 - np.abs(2.0 * ((t % period) / period) - 1.0))
+
+
+ISOMETRIC_CONTRACTION_RATIOS = (0.0, 0.04, 0.08, 0.12, 0.16, 0.20)
+
+
+def isometric_contraction_ratio(t: float, duration_s: float) -> float:
+    """Where the isometric protocol clamps the muscle at ``t``: one ratio per sixth of the duration."""
+    index = min(int(t / duration_s * len(ISOMETRIC_CONTRACTION_RATIOS)), len(ISOMETRIC_CONTRACTION_RATIOS) - 1)
+    return ISOMETRIC_CONTRACTION_RATIOS[index]
+
+
+def isometric(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Seed 004 sec 2.1's isometric test: the muscle clamped at six contraction ratios
+    (:data:`ISOMETRIC_CONTRACTION_RATIOS`, the recorder holds it there), a pressure triangle
+    0.3 -> 5.5 -> 0.3 bar at each; the load cell then reads the static force itself."""
+    t = _time(duration_s, dt_s)
+    period = duration_s / len(ISOMETRIC_CONTRACTION_RATIOS)
+    return 0.3 + 5.2 * (1.0 - np.abs(2.0 * ((t % period) / period) - 1.0))
+
+
 SCENARIOS: dict[str, Scenario] = {
     "triangles": triangles,
     "sines": sines,
@@ -127,4 +157,6 @@ SCENARIOS: dict[str, Scenario] = {
     "forc": forc,
     "mixed": mixed,
     "stepped-sine": stepped_sine,
+    "isotonic": isotonic,
+    "isometric": isometric,
 }
