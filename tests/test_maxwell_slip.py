@@ -27,6 +27,13 @@ def test_element_law_is_elastoplastic():
     np.testing.assert_allclose(s, [0.0, 0.5, 1.0, 0.0])
 
 
+def test_despike_removes_single_glitches_and_keeps_turns():
+    from host.identify.maxwell_slip import despike
+
+    x = np.array([0.0, 1.0, 2.0, 2.3, 3.0, 2.0, 1.0, 5.0, 0.0, -1.0])
+    np.testing.assert_allclose(despike(x), [0.0, 1.0, 2.0, 2.3, 2.3, 2.0, 1.0, 1.0, 0.0, -1.0])
+
+
 def test_recovers_known_break_forces():
     x, force, breaks = synthetic(0)
     model = MaxwellSlip(3).fit(x, force)

@@ -60,7 +60,7 @@ def run_force(args: argparse.Namespace) -> int:
 
 
 def run_maxwell_slip(args: argparse.Namespace) -> int:
-    from host.identify.maxwell_slip import select_and_fit
+    from host.identify.maxwell_slip import despike, select_and_fit
 
     columns = read_columns(args.data, [args.position_column, args.force_column])
     result = select_and_fit(columns[args.position_column], columns[args.force_column], args.elements)
@@ -68,7 +68,8 @@ def run_maxwell_slip(args: argparse.Namespace) -> int:
         from host.identify.maxwell_slip import plot_loops
 
         plot_loops(
-            [(Path(args.data).stem, columns[args.position_column], columns[args.force_column], result.model)], args.plot
+            [(Path(args.data).stem, despike(columns[args.position_column]), columns[args.force_column], result.model)],
+            args.plot,
         )
     if args.json:
         print(json.dumps(result.as_dict()))
