@@ -27,11 +27,14 @@ def test_element_law_is_elastoplastic():
     np.testing.assert_allclose(s, [0.0, 0.5, 1.0, 0.0])
 
 
-def test_despike_removes_single_glitches_and_keeps_turns():
+def test_despike_removes_single_sample_glitches_and_keeps_ramps():
     from host.identify.maxwell_slip import despike
 
-    x = np.array([0.0, 1.0, 2.0, 2.3, 3.0, 2.0, 1.0, 5.0, 0.0, -1.0])
-    np.testing.assert_allclose(despike(x), [0.0, 1.0, 2.0, 2.3, 2.3, 2.0, 1.0, 1.0, 0.0, -1.0])
+    ramp = np.linspace(0, 5, 11)
+    np.testing.assert_allclose(despike(ramp), ramp)
+    glitch = ramp.copy()
+    glitch[4] += 3.0
+    np.testing.assert_allclose(despike(glitch), ramp)
 
 
 def test_recovers_known_break_forces():
