@@ -149,6 +149,45 @@ def isometric(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.nd
     return 0.3 + 5.2 * (1.0 - np.abs(2.0 * ((t % period) / period) - 1.0))
 
 
+def decaying_sines(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Seed 003 Fig 7's wiping-out test: one sine cycle over the full 0-4 bar from the 2 bar middle,
+    then ten whose amplitude falls linearly to zero, the whole sequence twice. The full cycle wipes
+    out what came before, so both halves must give the same output."""
+    t = _time(duration_s, dt_s)
+    half = duration_s / 2.0
+    local = t % half
+    frequency = 11.0 / half
+    cycles = local * frequency
+    envelope = np.where(cycles < 1.0, 1.0, np.clip(1.0 - (cycles - 1.0) / 10.0, 0.0, 1.0))
+    return 2.0 + 2.0 * envelope * np.sin(2 * np.pi * frequency * local)
+
+
+MINOR_LOOP_LOW_BAR, MINOR_LOOP_HIGH_BAR = 2.0, 2.5
+MINOR_LOOP_CORNERS_BAR = (
+    (2.0, 4.0, 0.5)
+    + (MINOR_LOOP_LOW_BAR, MINOR_LOOP_HIGH_BAR) * 3
+    + (MINOR_LOOP_LOW_BAR,)
+    + (0.0, 3.5)
+    + (MINOR_LOOP_LOW_BAR, MINOR_LOOP_HIGH_BAR) * 3
+    + (MINOR_LOOP_LOW_BAR,)
+)
+
+
+def minor_loop_corner_times(duration_s: float) -> np.ndarray:
+    """When :func:`minor_loops` reaches each of :data:`MINOR_LOOP_CORNERS_BAR` [s]."""
+    steps = np.abs(np.diff(MINOR_LOOP_CORNERS_BAR))
+    return np.concatenate([[0.0], np.cumsum(steps)]) * duration_s / float(steps.sum())
+
+
+def minor_loops(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Seed 003 Fig 8's congruency test: the same small minor loop (2.0 <-> 2.5 bar, three times)
+    after two different histories: arriving at 2 bar from below (4 -> 0.5 -> 2) and from above
+    (0 -> 3.5 -> 2). One ramp rate throughout; corners in :data:`MINOR_LOOP_CORNERS_BAR`. The
+    loop is small so that the larger friction elements keep each history (an offset between the
+    loops); a Preisach-type system then gives loops of the same shape."""
+    return np.interp(_time(duration_s, dt_s), minor_loop_corner_times(duration_s), MINOR_LOOP_CORNERS_BAR)
+
+
 SCENARIOS: dict[str, Scenario] = {
     "triangles": triangles,
     "sines": sines,
@@ -159,4 +198,6 @@ SCENARIOS: dict[str, Scenario] = {
     "stepped-sine": stepped_sine,
     "isotonic": isotonic,
     "isometric": isometric,
+    "decaying-sines": decaying_sines,
+    "minor-loops": minor_loops,
 }

@@ -11,6 +11,8 @@ from hil.record import record, truth_path, write_recording
 def run_record(args: argparse.Namespace) -> int:
     if not 1.0 <= args.duration <= 24 * 3600:
         raise DataError(f"--duration {args.duration} s is outside 1 s .. 24 h")
+    if getattr(args, "rig", "muscle") == "joint":
+        return _record_joint(args)
     try:
         recording = record(
             args.scenario, args.seed, args.duration, args.effect, args.rate, decoy_columns=args.decoy_columns
@@ -21,5 +23,20 @@ def run_record(args: argparse.Namespace) -> int:
     print(
         f"wrote {path} ({recording.t.size} samples at {args.rate:g} Hz, scenario {args.scenario}, "
         f"effect {args.effect}) and {truth_path(path).name}"
+    )
+    return 0
+
+
+def _record_joint(args: argparse.Namespace) -> int:
+    from hil.joint_record import record_joint, write_joint_recording
+
+    try:
+        recording = record_joint(args.scenario, args.seed, args.duration, args.effect, args.rate)
+    except ValueError as exc:
+        raise DataError(str(exc)) from exc
+    path = write_joint_recording(recording, args.out)
+    print(
+        f"wrote {path} (joint: {recording.t.size} samples at {args.rate:g} Hz, scenario {args.scenario}) "
+        f"and {truth_path(path).name}"
     )
     return 0

@@ -41,7 +41,7 @@ def run_force(args: argparse.Namespace) -> int:
         {
             "samples": int(force.size),
             "force_range_n": spread,
-            "rmse_pct_range": 100 * float(result["rmse_n"]) / spread,  # type: ignore[arg-type]
+            "rmse_pct_range": 100 * float(str(result["rmse_n"])) / spread,
             "pressure_column": pressure_column,
             "force_column": force_column,
         }
