@@ -54,9 +54,14 @@ def _inputs(
     return tuple(arrays)
 
 
-def _check_fit_data(p: Array, eps: Array, minimum: int) -> None:
+def _check_fit_data(p: Array, eps: Array, minimum: int, force: Array) -> None:
     if p.size < minimum:
         raise DataError(f"only {p.size} samples; a static force fit needs at least {minimum}")
+    if np.ptp(force) <= 0.05 * max(float(np.max(np.abs(force))), 1e-12):
+        raise DataError(
+            "the force hardly varies (a constant load): a force law needs the force to change; record an "
+            "isometric run (pmactl hil record --scenario isometric) or isotonic curves at several loads"
+        )
     if np.ptp(p) <= 0 or np.ptp(eps) <= 0:
         raise DataError(
             "pressure or contraction does not vary: the force law needs both to change "
@@ -86,7 +91,7 @@ class TonduLopezForce:
 
     def fit(self, pressure_bar: ArrayLike, contraction_ratio: ArrayLike, force_n: ArrayLike) -> Self:
         p, eps, force = _inputs(pressure_bar, contraction_ratio, force_n)
-        _check_fit_data(p, eps, 4)
+        _check_fit_data(p, eps, 4, force)
         if self.radius_m is not None and not self.radius_m > 0:
             raise ModelError(f"radius_m {self.radius_m} must be positive (metres)")
         area = math.pi * self.radius_m**2 if self.radius_m is not None else 1.0
@@ -166,7 +171,7 @@ class SarosiForce:
 
     def fit(self, pressure_bar: ArrayLike, contraction_ratio: ArrayLike, force_n: ArrayLike) -> Self:
         p, eps, force = _inputs(pressure_bar, contraction_ratio, force_n)
-        _check_fit_data(p, eps, 6)
+        _check_fit_data(p, eps, 6, force)
         p_kpa, kappa = p * 100.0, eps * 100.0
 
         def cost(b: float) -> float:

@@ -173,10 +173,18 @@ def _rmse(a: Array, b: Array) -> float:
 
 
 def select_and_fit(
-    position: ArrayLike, force: ArrayLike, elements: int | None = None, max_elements: int = 8
+    position: ArrayLike, force: ArrayLike, elements: int | None = None, max_elements: int = 8, clean: bool = True
 ) -> SlipSelection:
-    """Choose N on the held-out last 30 % (unless given), refit on all; scores as in the module docstring."""
+    """Choose N on the held-out last 30 % (unless given), refit on all; scores as in the module docstring.
+
+    With ``clean`` the position goes through :func:`despike` first; the model then expects a
+    despiked position too (``model.predict(despike(x))``).
+    """
+    if elements is not None and elements < 1:
+        raise DataError(f"--elements {elements} must be at least 1")
     x, f = np.asarray(position, float), np.asarray(force, float)
+    if clean:
+        x = despike(x)
     spread = float(np.ptp(f)) or 1.0
     cut = int(TRAIN_SHARE * x.size)
     train = np.zeros(x.size, bool)
