@@ -56,7 +56,9 @@ def apply_effect(
     if name == "rate_dependence":
         params = replace(params, rate_friction_s_per_m=values["rate_friction_s_per_m"])
     elif name == "creep":
-        params = replace(params, **values)
+        params = replace(
+            params, creep_fraction=values["creep_fraction"], creep_time_constant_s=values["creep_time_constant_s"]
+        )
     elif name == "transport_delay":
         params = replace(params, dead_time_s=values["dead_time_s"])
     elif name == "load_dependence":

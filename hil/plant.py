@@ -139,6 +139,43 @@ def initial_state(params: PlantParams, pressure_bar: float = 0.0) -> PlantState:
     return state._replace(contraction_m=position, slips_m=stretched)
 
 
+def valve_step(params: PlantParams, pressure_bar: float, command_bar: float) -> float:
+    """Chamber pressure [bar] one step ``params.dt_s`` later: first-order lag to the clipped
+    command, limited to ``valve_max_rate_bar_per_s``."""
+    setpoint = min(max(command_bar, 0.0), params.supply_bar)
+    change = (setpoint - pressure_bar) * (1.0 - math.exp(-params.dt_s / params.valve_time_constant_s))
+    limit = params.valve_max_rate_bar_per_s * params.dt_s
+    return pressure_bar + min(max(change, -limit), limit)
+
+
+def slip_friction(
+    slips_m: tuple[float, ...], move_m: float, stiffness: tuple[float, ...], limits_m: list[float]
+) -> tuple[float, float]:
+    """Braid friction [N] of Maxwell-slip elements after a contraction ``move_m`` from their
+    stretches ``slips_m`` (limits = break force / stiffness, already scaled), and its derivative
+    with respect to the move [N/m] (only the elements that stick contribute)."""
+    friction = 0.0
+    slope = 0.0
+    for s, kk, lim in zip(slips_m, stiffness, limits_m):
+        stretch = s + move_m
+        if stretch > lim:
+            friction += kk * lim
+        elif stretch < -lim:
+            friction -= kk * lim
+        else:
+            friction += kk * stretch
+            slope += kk
+    return friction, slope
+
+
+def advance_slips(params: PlantParams, slips_m: tuple[float, ...], move_m: float, scale: float) -> tuple[float, ...]:
+    """Element stretches [m] after a contraction ``move_m``, each clipped at its (scaled) slip limit."""
+    return tuple(
+        min(max(s + move_m, -scale * f / k), scale * f / k)
+        for s, f, k in zip(slips_m, params.slip_break_force_n, params.slip_stiffness_n_per_m)
+    )
+
+
 def _friction_scale(params: PlantParams, t: float, speed_m_s: float) -> float:
     """Braid friction relative to nominal: softened by warmth, raised by the square of sliding speed."""
     warmth = params.temperature.at(t) - params.reference_temperature_c
@@ -164,16 +201,8 @@ def _balance(params: PlantParams, t: float, x: PlantState, pressure_bar: float, 
         force = area_pa * (a * (1.0 - k_shorten * eps) ** 2 - b)
         slope = -2.0 * area_pa * a * k_shorten * (1.0 - k_shorten * eps) / length
         move = position - x_prev
-        friction = 0.0
-        for s, kk, lim in zip(slips, stiffness, limits):
-            stretch = s + move
-            if stretch > lim:
-                friction += kk * lim
-            elif stretch < -lim:
-                friction -= kk * lim
-            else:
-                friction += kk * stretch
-                slope -= kk
+        friction, sticking = slip_friction(slips, move, stiffness, limits)
+        slope -= sticking
         value = force - weight - params.spring_n_per_m * position - friction - viscous * move
         return value, slope - params.spring_n_per_m - viscous
 
@@ -198,19 +227,13 @@ def update(t: float, x: PlantState, u: float, params: PlantParams) -> PlantState
         command = x.line_bar[0]
     else:
         line, command = x.line_bar, u
-    setpoint = min(max(command, 0.0), params.supply_bar)
     dt = params.dt_s
-    change = (setpoint - x.pressure_bar) * (1.0 - math.exp(-dt / params.valve_time_constant_s))
-    limit = params.valve_max_rate_bar_per_s * dt
-    pressure = x.pressure_bar + min(max(change, -limit), limit)
+    pressure = valve_step(params, x.pressure_bar, command)
     t_next = t + dt
     contraction = _balance(params, t_next, x, pressure, params.damping_n_s_per_m)
     move = contraction - x.contraction_m
     soften = _friction_scale(params, t_next, x.speed_m_s)
-    slips = tuple(
-        min(max(s + move, -soften * f / k), soften * f / k)
-        for s, f, k in zip(x.slips_m, params.slip_break_force_n, params.slip_stiffness_n_per_m)
-    )
+    slips = advance_slips(params, x.slips_m, move, soften)
     creep = x.creep_m
     if params.creep_fraction:
         creep += dt * (params.creep_fraction * contraction - creep) / params.creep_time_constant_s
@@ -220,6 +243,16 @@ def update(t: float, x: PlantState, u: float, params: PlantParams) -> PlantState
 def output(t: float, x: PlantState, params: PlantParams) -> Outputs:
     """Sensor quantities at ``t``: measured contraction is the muscle's minus its creep."""
     return Outputs((x.contraction_m - x.creep_m) * 1e3, x.pressure_bar, params.load.at(t), params.temperature.at(t))
+
+
+def tendon_force_n(t: float, x: PlantState, params: PlantParams) -> float:
+    """What a load cell in series with the muscle reads [N]: the weight, the spring and the damper.
+
+    Equal to the static muscle force minus the braid friction (the friction is inside the muscle).
+    """
+    return (
+        params.load.at(t) * GRAVITY + params.spring_n_per_m * x.contraction_m + params.damping_n_s_per_m * x.speed_m_s
+    )
 
 
 def simulate(

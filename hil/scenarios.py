@@ -94,6 +94,100 @@ def mixed(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarra
     return np.concatenate(pieces)[: int(round(duration_s / dt_s))]
 
 
+STEPPED_SINE_FREQUENCIES_HZ = (0.1, 0.2, 0.35, 0.6, 1.0, 1.7, 3.0)
+
+
+def stepped_sine(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Seed 004's frequency response: sinusoids of 0.6 bar around 2 bar, one frequency after another.
+
+    Frequencies :data:`STEPPED_SINE_FREQUENCIES_HZ` in ascending order, each for an equal share of
+    the duration in whole cycles (at least 3: one to settle, two to analyse), each starting and
+    ending at the offset so the command never steps. The amplitude varies by +-10 % with the seed.
+    The fastest segment asks 11 bar/s of the valve, below its 40 bar/s rate limit.
+    """
+    offset, amplitude = 2.0, 0.6 * float(rng.uniform(0.9, 1.1))
+    share = duration_s / len(STEPPED_SINE_FREQUENCIES_HZ)
+    pieces = []
+    for frequency in STEPPED_SINE_FREQUENCIES_HZ:
+        cycles = max(3, int(share * frequency))
+        local = np.arange(int(round(cycles / frequency / dt_s))) * dt_s
+        pieces.append(offset + amplitude * np.sin(2 * np.pi * frequency * local))
+    sequence = np.concatenate(pieces)
+    steps = int(round(duration_s / dt_s))
+    if sequence.size < steps:
+        sequence = np.concatenate([sequence, np.full(steps - sequence.size, offset)])
+    return sequence[:steps]
+
+
+def isotonic(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Static force map: slow triangles 0.3 -> 5.5 -> 0.3 bar, ten over the duration (at least 40 s each).
+
+    Quasi-static (0.26 bar/s at 400 s), so the load cell reads the muscle's static force minus its
+    braid friction. With ``--effect load_dependence`` the load steps through seed 000's five masses,
+    two triangles per mass: isotonic curves at five forces, the data a static force law is fitted on.
+    """
+    t = _time(duration_s, dt_s)
+    period = max(40.0, duration_s / 10.0)
+    return 0.3 + 5.2 * (1.0 - np.abs(2.0 * ((t % period) / period) - 1.0))
+
+
+ISOMETRIC_CONTRACTION_RATIOS = (0.0, 0.04, 0.08, 0.12, 0.16, 0.20)
+
+
+def isometric_contraction_ratio(t: float, duration_s: float) -> float:
+    """Where the isometric protocol clamps the muscle at ``t``: one ratio per sixth of the duration."""
+    index = min(int(t / duration_s * len(ISOMETRIC_CONTRACTION_RATIOS)), len(ISOMETRIC_CONTRACTION_RATIOS) - 1)
+    return ISOMETRIC_CONTRACTION_RATIOS[index]
+
+
+def isometric(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Seed 004 sec 2.1's isometric test: the muscle clamped at six contraction ratios
+    (:data:`ISOMETRIC_CONTRACTION_RATIOS`, the recorder holds it there), a pressure triangle
+    0.3 -> 5.5 -> 0.3 bar at each; the load cell then reads the static force itself."""
+    t = _time(duration_s, dt_s)
+    period = duration_s / len(ISOMETRIC_CONTRACTION_RATIOS)
+    return 0.3 + 5.2 * (1.0 - np.abs(2.0 * ((t % period) / period) - 1.0))
+
+
+def decaying_sines(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Seed 003 Fig 7's wiping-out test: one sine cycle over the full 0-4 bar from the 2 bar middle,
+    then ten whose amplitude falls linearly to zero, the whole sequence twice. The full cycle wipes
+    out what came before, so both halves must give the same output."""
+    t = _time(duration_s, dt_s)
+    half = duration_s / 2.0
+    local = t % half
+    frequency = 11.0 / half
+    cycles = local * frequency
+    envelope = np.where(cycles < 1.0, 1.0, np.clip(1.0 - (cycles - 1.0) / 10.0, 0.0, 1.0))
+    return 2.0 + 2.0 * envelope * np.sin(2 * np.pi * frequency * local)
+
+
+MINOR_LOOP_LOW_BAR, MINOR_LOOP_HIGH_BAR = 2.0, 2.5
+MINOR_LOOP_CORNERS_BAR = (
+    (2.0, 4.0, 0.5)
+    + (MINOR_LOOP_LOW_BAR, MINOR_LOOP_HIGH_BAR) * 3
+    + (MINOR_LOOP_LOW_BAR,)
+    + (0.0, 3.5)
+    + (MINOR_LOOP_LOW_BAR, MINOR_LOOP_HIGH_BAR) * 3
+    + (MINOR_LOOP_LOW_BAR,)
+)
+
+
+def minor_loop_corner_times(duration_s: float) -> np.ndarray:
+    """When :func:`minor_loops` reaches each of :data:`MINOR_LOOP_CORNERS_BAR` [s]."""
+    steps = np.abs(np.diff(MINOR_LOOP_CORNERS_BAR))
+    return np.concatenate([[0.0], np.cumsum(steps)]) * duration_s / float(steps.sum())
+
+
+def minor_loops(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Seed 003 Fig 8's congruency test: the same small minor loop (2.0 <-> 2.5 bar, three times)
+    after two different histories: arriving at 2 bar from below (4 -> 0.5 -> 2) and from above
+    (0 -> 3.5 -> 2). One ramp rate throughout; corners in :data:`MINOR_LOOP_CORNERS_BAR`. The
+    loop is small so that the larger friction elements keep each history (an offset between the
+    loops); a Preisach-type system then gives loops of the same shape."""
+    return np.interp(_time(duration_s, dt_s), minor_loop_corner_times(duration_s), MINOR_LOOP_CORNERS_BAR)
+
+
 SCENARIOS: dict[str, Scenario] = {
     "triangles": triangles,
     "sines": sines,
@@ -101,4 +195,9 @@ SCENARIOS: dict[str, Scenario] = {
     "holds": holds,
     "forc": forc,
     "mixed": mixed,
+    "stepped-sine": stepped_sine,
+    "isotonic": isotonic,
+    "isometric": isometric,
+    "decaying-sines": decaying_sines,
+    "minor-loops": minor_loops,
 }

@@ -134,6 +134,8 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument(
         "--decoy-columns", action="store_true", help="let load and temperature columns vary without any physical effect"
     )
+    rec.add_argument("--rig", choices=["muscle", "joint"], default="muscle",
+                     help="one muscle, or two on a pulley (writes t,u,y,u1,u2,p1,p2,theta)")
     rec.add_argument("--out", required=True, metavar="CSV", help="output CSV; the truth goes to <name>.truth.json")
     rec.set_defaults(run=_lazy("host.cli.hil", "run_record"))
     srv = hil_sub.add_parser("serve", help="real-time mode: serve the emulated rig's serial DAQ on a pseudo-terminal")
@@ -144,6 +146,7 @@ def build_parser() -> argparse.ArgumentParser:
     importlib.import_module("host.cli.bundle").register(sub)
     importlib.import_module("host.cli.deploy").register(sub)
     importlib.import_module("host.cli.sweep").register(sub)
+    importlib.import_module("host.cli.identify").register(sub)
     return parser
 
 

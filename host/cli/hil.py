@@ -14,6 +14,8 @@ def run_record(args: argparse.Namespace) -> int:
     if not 1.0 <= args.duration <= 24 * 3600:
         raise DataError(f"--duration {args.duration} s is outside 1 s .. 24 h")
     check_output(args.out, "--out")
+    if getattr(args, "rig", "muscle") == "joint":
+        return _record_joint(args)
     with Steps(2, wanted(False), "pmactl hil record") as steps:
         steps.start(f"running {args.duration:g} s of {args.scenario} (about {args.duration / 110:.0f} s)")
         try:
@@ -27,5 +29,20 @@ def run_record(args: argparse.Namespace) -> int:
     print(
         f"wrote {path} ({recording.t.size} samples at {args.rate:g} Hz, scenario {args.scenario}, "
         f"effect {args.effect}) and {truth_path(path).name}"
+    )
+    return 0
+
+
+def _record_joint(args: argparse.Namespace) -> int:
+    from hil.joint_record import record_joint, write_joint_recording
+
+    try:
+        recording = record_joint(args.scenario, args.seed, args.duration, args.effect, args.rate)
+    except ValueError as exc:
+        raise DataError(str(exc)) from exc
+    path = write_joint_recording(recording, args.out)
+    print(
+        f"wrote {path} (joint: {recording.t.size} samples at {args.rate:g} Hz, scenario {args.scenario}) "
+        f"and {truth_path(path).name}"
     )
     return 0

@@ -1,0 +1,92 @@
+"""``pmactl identify force`` and ``pmactl identify maxwell-slip``: static laws from CSV columns."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from edge.errors import DataError
+from host.cli.identify_run import read_columns
+
+GRAVITY = 9.81
+
+
+def _header(path: str) -> list[str]:
+    with Path(path).open() as handle:
+        return [h.strip() for h in handle.readline().split(",")]
+
+
+def run_force(args: argparse.Namespace) -> int:
+    from host.identify.force import FORCE_MODELS
+
+    try:
+        header = _header(args.data)
+    except OSError as exc:
+        raise DataError(f"{args.data}: cannot read file ({exc}); check the path") from exc
+    pressure_column = "p" if "p" in header else "u"
+    force_column = "force" if "force" in header else "load"
+    columns = read_columns(args.data, [pressure_column, "y", force_column])
+    if args.rest_length_mm is None or not args.rest_length_mm > 0:
+        raise DataError("pass --rest-length-mm (the muscle's rest length; contraction ratio = y / rest length)")
+    force = columns[force_column] * (GRAVITY if force_column == "load" else 1.0)
+    eps = columns["y"] / args.rest_length_mm
+    kwargs = {"radius_m": args.radius_mm / 1e3} if args.model == "tondu-lopez" and args.radius_mm else {}
+    model = FORCE_MODELS[args.model](**kwargs).fit(columns[pressure_column], eps, force)
+    result = model.as_dict()
+    spread = float(np.ptp(force))
+    result.update(
+        {
+            "samples": int(force.size),
+            "force_range_n": spread,
+            "rmse_pct_range": 100 * float(str(result["rmse_n"])) / spread,
+            "pressure_column": pressure_column,
+            "force_column": force_column,
+        }
+    )
+    if args.json:
+        print(json.dumps(result))
+        return 0
+    print(
+        f"{args.model} static force on {Path(args.data).name} ({force.size} samples, pressure from "
+        f"'{pressure_column}', force from '{force_column}'{' x g' if force_column == 'load' else ''}):"
+    )
+    for key, value in result.items():
+        if key not in {"model", "samples", "pressure_column", "force_column"}:
+            print(f"  {key:<28} {value:.6g}" if isinstance(value, float) else f"  {key:<28} {value}")
+    return 0
+
+
+def run_maxwell_slip(args: argparse.Namespace) -> int:
+    from host.identify.maxwell_slip import despike, select_and_fit
+
+    columns = read_columns(args.data, [args.position_column, args.force_column])
+    result = select_and_fit(columns[args.position_column], columns[args.force_column], args.elements)
+    if args.plot:
+        from host.identify.maxwell_slip import plot_loops
+
+        plot_loops(
+            [(Path(args.data).stem, despike(columns[args.position_column]), columns[args.force_column], result.model)],
+            args.plot,
+        )
+    if args.json:
+        print(json.dumps(result.as_dict()))
+        return 0
+    print(
+        f"Maxwell-slip on {Path(args.data).name}: {result.model.elements} element(s), "
+        f"train RMSE {result.train_rmse:.4g} ({result.train_rmse_pct:.2f} % of range), "
+        f"held-out RMSE {result.test_rmse:.4g} ({result.test_rmse_pct:.2f} % of range)"
+    )
+    if result.scan:
+        print(f"  {'elements':>8} {'held-out RMSE':>14} {'% of range':>10}")
+        for row in result.scan:
+            print(f"  {row['elements']:>8} {row['test_rmse']:>14.4g} {row['test_rmse_pct']:>10.2f}")
+    print(f"  {'stiffness [N/unit]':>20} {'break force [N]':>16}")
+    for k, f in zip(result.model.stiffness_, result.model.break_force_):
+        print(f"  {k:>20.5g} {f:>16.5g}")
+    print(f"  offset {result.model.offset_:.5g} N; {result.note}")
+    if args.plot:
+        print(f"  figure written to {args.plot}")
+    return 0
