@@ -61,8 +61,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Fit a static force law to isometric / isotonic data: columns p [bar] (or u), "
         "contraction as y [mm] and a force column force [N] (or load [kg], converted with g).",
     )
-    force.add_argument("data", metavar="DATA.csv")
-    force.add_argument("--model", required=True, choices=["tondu-lopez", "sarosi"])
+    force.add_argument("data", metavar="DATA.csv", help="isometric or isotonic run (columns as described above)")
+    force.add_argument(
+        "--model",
+        required=True,
+        choices=["tondu-lopez", "sarosi"],
+        help="static force law (seed 004 eq 1 or seed 000 eqs 15-16)",
+    )
     force.add_argument(
         "--rest-length-mm", type=float, metavar="MM", help="rest length l0 [mm] (contraction ratio = y / l0)"
     )
@@ -78,8 +83,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     slip.add_argument("data", metavar="DATA.csv", help="columns t, x (position) and force (or u, y)")
     slip.add_argument("--elements", type=int, metavar="N", help="number of elements (default: held-out choice)")
-    slip.add_argument("--position-column", default="x", metavar="NAME")
-    slip.add_argument("--force-column", default="force", metavar="NAME")
+    slip.add_argument("--position-column", default="x", metavar="NAME", help="position column [mm] (default x)")
+    slip.add_argument("--force-column", default="force", metavar="NAME", help="force column [N] (default force)")
     slip.add_argument("--plot", metavar="OUT.png", help="write measured vs fitted loops here")
     slip.add_argument("--json", action="store_true", help="print one JSON object")
     slip.set_defaults(run=_lazy("run_maxwell_slip"))
