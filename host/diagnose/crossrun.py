@@ -36,7 +36,7 @@ from host.diagnose.decide import CandidateScore, why_not
 from host.diagnose.features import branch_offset, first_order, slow_part, smoothed_rate
 from host.diagnose.folds import holdout_masks, noise_floor
 from host.diagnose.hammerstein import FittedModel, _steady_state, fit_hammerstein, rmse
-from host.diagnose.run import MIN_SAMPLES, choose_actuator_lag, fit_baseline, prepare
+from host.diagnose.run import MIN_SAMPLES, PREISACH_LEVELS, choose_actuator_lag, fit_baseline, prepare
 from host.identify.common import MemoryStart, memory_start
 from host.identify.preisach import EverettGrid, regressor_chunks
 
@@ -136,7 +136,7 @@ def _on_grid_of(test: Measurement, dt: float) -> tuple[Measurement, list[str]]:
 
 
 def cross_run(
-    train: Measurement, tests: list[Measurement], *, folds: int = 4, levels: int = 12, progress: bool | None = None
+    train: Measurement, tests: list[Measurement], *, folds: int = 4, levels: int = PREISACH_LEVELS, progress: bool | None = None
 ) -> list[CrossRunResult]:
     """What the model identified on ``train`` gets wrong on each of ``tests``."""
     from host.diagnose.run import decimated

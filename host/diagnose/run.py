@@ -39,9 +39,12 @@ __all__ = ["CAUSES", "Diagnosis", "diagnose", "prepare"]
 # first-order actuator (valve + mechanics) lag before the hysteresis, part of the baseline's
 # dynamics (seed 004: a PAM is a first-order lag plus a dead time); up to 250 ms, so that a plant
 # with more lag than a valve alone does not leave a lag a short dead time then "explains"
-ACTUATOR_LAGS_S = (0.0, 0.015, 0.03, 0.05, 0.08, 0.12, 0.18, 0.25)
+ACTUATOR_LAGS_S = (0.0, 0.02, 0.05, 0.1, 0.17, 0.25)
 MIN_SAMPLES = 400
-MAX_WORK_SAMPLES = 50_000
+# Everett grid intervals of the baseline: 12 left 2-5x the effect sizes of foreign plants as model
+# error (tuning plants); 16 halves it at 1.7x the cost
+PREISACH_LEVELS = 16
+MAX_WORK_SAMPLES = 30_000
 LARGE_PROBLEM_CELLS = 20_000_000  # rows x Everett cells above which a second BLAS thread pays
 
 
@@ -161,6 +164,7 @@ def fit_baseline(ctx: Context) -> FittedModel:
 def _progress(total: int, enabled: bool | None):  # type: ignore[no-untyped-def]
     from tqdm import tqdm
 
+    tqdm.monitor_interval = 0  # no monitor thread: the bar lives in one call
     show = sys.stderr.isatty() if enabled is None else enabled
     return tqdm(total=total, desc="diagnose", unit="fit", file=sys.stderr, leave=False, disable=not show)
 
@@ -170,7 +174,7 @@ def diagnose(
     *,
     folds: int = 4,
     blocks_per_fold: int = BLOCKS_PER_FOLD,
-    levels: int = 12,
+    levels: int = PREISACH_LEVELS,
     progress: bool | None = None,
 ) -> Diagnosis:
     """Run the diagnosis (see module docstring). ``progress``: a tqdm line on stderr (None: when
