@@ -18,7 +18,6 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -57,8 +56,14 @@ def recording(n: int, tmp: Path) -> Path:
     reps = int(np.ceil(n / base.t.size))
     cols = [np.tile(v, reps)[:n] for v in (base.u, base.y, base.p, base.load, base.temperature)]
     t = np.arange(n) * 0.01
-    np.savetxt(path, np.column_stack([t, *cols]), delimiter=",", header="t,u,y,p,load,temperature", comments="",
-               fmt=["%.2f", "%.5f", "%.4f", "%.5f", "%.3f", "%.2f"])
+    np.savetxt(
+        path,
+        np.column_stack([t, *cols]),
+        delimiter=",",
+        header="t,u,y,p,load,temperature",
+        comments="",
+        fmt=["%.2f", "%.5f", "%.4f", "%.5f", "%.3f", "%.2f"],
+    )
     return path
 
 
@@ -72,11 +77,15 @@ def main(argv: list[str]) -> int:
         with tempfile.TemporaryDirectory() as tmp:
             for n in lengths:
                 path = recording(n, Path(tmp))
-                out = subprocess.run([sys.executable, "-c", CHILD, str(path)], capture_output=True, text=True,
-                                     check=True, env=env)
+                out = subprocess.run(
+                    [sys.executable, "-c", CHILD, str(path)], capture_output=True, text=True, check=True, env=env
+                )
                 row = json.loads(out.stdout.strip().splitlines()[-1])
-                print(f"{n:>9} {row['seconds']:>7.1f} {row['cpu_s']:>7.1f} {row['load_s']:>7.1f} "
-                      f"{row['peak_mb']:>8.0f} {row['cause']:>10}", flush=True)
+                print(
+                    f"{n:>9} {row['seconds']:>7.1f} {row['cpu_s']:>7.1f} {row['load_s']:>7.1f} "
+                    f"{row['peak_mb']:>8.0f} {row['cause']:>10}",
+                    flush=True,
+                )
     finally:
         if busy:
             busy.terminate()

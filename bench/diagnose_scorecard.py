@@ -73,11 +73,12 @@ def table(title: str, rows: list[dict[str, object]]) -> None:
     nones = [r for r in rows if r["effect"] == "none"]
     false = [r for r in nones if r["verdict"] != "none"]
     gains = [float(r["gain"]) for r in named]  # type: ignore[arg-type]
+    cpu = [float(r["cpu_s"]) for r in rows]  # type: ignore[arg-type]
     print(
         f"\nnamed {len(named)}/{len(effect_rows)} ({len(named) / max(1, len(effect_rows)):.0%}); "
         f"false alarms {len(false)}/{len(nones)}; median held-out gain when named "
         f"{np.median(gains) if gains else float('nan'):.1%}; "
-        f"CPU median {np.median([float(r['cpu_s']) for r in rows]):.1f} s, max {max(float(r['cpu_s']) for r in rows):.1f} s"  # type: ignore[arg-type]
+        f"CPU median {np.median(cpu):.1f} s, max {max(cpu):.1f} s"
     )
     wrong = [r for r in effect_rows if r["verdict"] != r["effect"]]
     for r in wrong + false:

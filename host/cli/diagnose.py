@@ -9,12 +9,13 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from edge.errors import DataError
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``diagnose`` subcommand (imported lazily: ``--help`` needs only the standard library)."""
     diag = sub.add_parser(
         "diagnose", help="what the simulation gets wrong on a recording: name the cause, extend, measure the gain"
@@ -91,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cross_run(args: argparse.Namespace, say, progress: bool | None) -> int:  # type: ignore[no-untyped-def]
+def _cross_run(args: argparse.Namespace, say: Callable[..., None], progress: bool | None) -> int:
     from host.data import load_measurement
     from host.diagnose.crossrun import cross_run
 

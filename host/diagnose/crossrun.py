@@ -90,20 +90,30 @@ def simulate(model: FittedModel, rows: NDArray[np.float32], y0: float) -> NDArra
     return lfilter([1.0], np.r_[1.0, -model.ar], drive, zi=_steady_state(model.ar, y0))[0]
 
 
-def _linear(columns: list[NDArray[np.float64]], y: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np.float64]:
+def _linear(
+    columns: list[NDArray[np.float64]], y: NDArray[np.float64], train: NDArray[np.bool_]
+) -> NDArray[np.float64]:
     design = np.column_stack(columns + [np.ones(y.size)])
     theta, *_ = np.linalg.lstsq(design[train], y[train], rcond=None)
     return design @ theta
 
 
-def _best(predictions: list[NDArray[np.float64]], y: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np.float64]:
+def _best(
+    predictions: list[NDArray[np.float64]], y: NDArray[np.float64], train: NDArray[np.bool_]
+) -> NDArray[np.float64]:
     errors = [rmse(p[train], y[train]) for p in predictions]
     return predictions[int(np.nanargmin(errors))]
 
 
 def corrected(
-    name: str, yhat: NDArray[np.float64], rows: NDArray[np.float32], u: NDArray[np.float64],
-    y: NDArray[np.float64], branch: NDArray[np.float64], dt: float, train: NDArray[np.bool_],
+    name: str,
+    yhat: NDArray[np.float64],
+    rows: NDArray[np.float32],
+    u: NDArray[np.float64],
+    y: NDArray[np.float64],
+    branch: NDArray[np.float64],
+    dt: float,
+    train: NDArray[np.bool_],
 ) -> NDArray[np.float64]:
     """``yhat`` with correction ``name`` fitted on ``train`` rows (see the module docstring)."""
     if name == "session_drift":
@@ -136,7 +146,12 @@ def _on_grid_of(test: Measurement, dt: float) -> tuple[Measurement, list[str]]:
 
 
 def cross_run(
-    train: Measurement, tests: list[Measurement], *, folds: int = 4, levels: int = PREISACH_LEVELS, progress: bool | None = None
+    train: Measurement,
+    tests: list[Measurement],
+    *,
+    folds: int = 4,
+    levels: int = PREISACH_LEVELS,
+    progress: bool | None = None,
 ) -> list[CrossRunResult]:
     """What the model identified on ``train`` gets wrong on each of ``tests``."""
     from host.diagnose.run import decimated
@@ -185,8 +200,14 @@ def cross_run(
         cause, reason = _verdict(scores, noise_floor(y))
         results.append(
             CrossRunResult(
-                test.source, cause, reason, {c: s.mean for c, s in scores.items()},
-                {c: s.all_gains for c, s in scores.items()}, train_rmse, rmse(yhat, y), notes,
+                test.source,
+                cause,
+                reason,
+                {c: s.mean for c, s in scores.items()},
+                {c: s.all_gains for c, s in scores.items()},
+                train_rmse,
+                rmse(yhat, y),
+                notes,
             )
         )
     return results

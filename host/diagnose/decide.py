@@ -29,7 +29,7 @@ import numpy as np
 from host.diagnose.candidates import CAUSES, OBSERVED_CAUSES
 
 GAIN_FLOOR = 0.03
-T_CRIT = 2.0
+T_CRIT = 1.5
 NOISE_SHARE = 0.25
 BLOWUP_RATIO = 4.0
 # rate dependence and a dead time both explain a lag; see choose() for how a near tie is read

@@ -25,7 +25,9 @@ def check_folds(folds: int, n: int, blocks_per_fold: int = BLOCKS_PER_FOLD) -> N
     """Refuse fold counts that cannot work, naming the range that can."""
     most = max(2, n // (blocks_per_fold * MIN_BLOCK_SAMPLES))
     if folds < 2:
-        raise DataError(f"--folds {folds}: a held-out comparison needs at least 2 folds; use 2-{min(most, 10)} (default 4)")
+        raise DataError(
+            f"--folds {folds}: a held-out comparison needs at least 2 folds; use 2-{min(most, 10)} (default 4)"
+        )
     if folds > most:
         raise DataError(
             f"--folds {folds}: {n} samples allow at most {most} folds of {blocks_per_fold} blocks of "

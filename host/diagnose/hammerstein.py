@@ -53,7 +53,7 @@ class FittedModel:
     x_shift: float = 0.0  # x = rows @ masses + x_shift
 
 
-def static_masses(rows: NDArray[np.float64], y: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np.float64]:
+def static_masses(rows: NDArray[np.floating], y: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np.float64]:
     """Cell masses >= 0 with ``y ~ rows @ masses + offset`` on ``train`` rows.
 
     The offset is eliminated by centring, then NNLS runs on the Cholesky factor of the centred
@@ -180,7 +180,7 @@ def fit_arx(
         past_y = _lagged(y, range(1, na + 1)) if na else np.zeros((y.size, 0))
         inputs = _lagged(x, range(0, nb))
         design = np.column_stack([past_y, inputs, extra, np.ones(y.size)])
-        theta, *_ = np.linalg.lstsq(design[usable], y[usable], rcond=None)
+        theta = np.asarray(np.linalg.lstsq(design[usable], y[usable], rcond=None)[0], dtype=np.float64)
         ar = theta[:na]
         if na and np.any(np.abs(np.roots(np.r_[1.0, -ar])) >= pole_limit):
             continue  # unstable, or slower than the rig's mechanics (slow relaxation is creep)

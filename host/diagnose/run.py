@@ -45,6 +45,7 @@ MIN_SAMPLES = 400
 # error (tuning plants); 16 halves it at 1.7x the cost
 PREISACH_LEVELS = 16
 MAX_WORK_SAMPLES = 30_000
+BASELINE_OUTLIER = 2.5
 LARGE_PROBLEM_CELLS = 20_000_000  # rows x Everett cells above which a second BLAS thread pays
 
 
@@ -161,7 +162,7 @@ def fit_baseline(ctx: Context) -> FittedModel:
     return model
 
 
-def _progress(total: int, enabled: bool | None):  # type: ignore[no-untyped-def]
+def _progress(total: int, enabled: bool | None):  # noqa: ANN202 - a tqdm bar
     from tqdm import tqdm
 
     tqdm.monitor_interval = 0  # no monitor thread: the bar lives in one call
@@ -196,9 +197,7 @@ def _diagnose(
     n = ctx.y.size
     check_folds(folds, n, blocks_per_fold)
     masks = holdout_masks(n, folds, blocks_per_fold)
-    scores = {c: CandidateScore(c) for c in CAUSES}
-    base_scores: list[float] = []
-    ext_scores: dict[str, list[float]] = {c: [] for c in CAUSES}
+    fold_rmse: list[tuple[float, dict[str, float | None]]] = []
     skipped = 0
     with _progress(1 + folds * (1 + len(CAUSES)), progress) as bar:
         ctx.lag_s = choose_actuator_lag(ctx)
@@ -213,21 +212,38 @@ def _diagnose(
                 bar.update(len(CAUSES))
                 continue
             base_rmse = rmse(baseline.prediction[scored], ctx.y[scored])
-            base_scores.append(base_rmse)
+            ext: dict[str, float | None] = {}
             for cause in CAUSES:
                 with np.errstate(all="ignore"):
                     model = extension(ctx, cause)
-                    ext = None if model is None else rmse(model.prediction[scored], ctx.y[scored])
-                scores[cause].add(base_rmse, ext)
-                ext_scores[cause].append(base_rmse if ext is None else ext)
+                    ext[cause] = None if model is None else rmse(model.prediction[scored], ctx.y[scored])
                 bar.update()
+            fold_rmse.append((base_rmse, ext))
+    # a fold whose baseline is several times worse than the others' is a failed baseline fit
+    # (every candidate "gains" there); it says nothing about any candidate
+    typical = float(np.median([b for b, _ in fold_rmse])) if fold_rmse else 0.0
+    kept = [(b, e) for b, e in fold_rmse if b <= BASELINE_OUTLIER * typical]
+    if len(kept) < len(fold_rmse):
+        notes.append(
+            f"{len(fold_rmse) - len(kept)} fold(s) left out: the baseline's held-out error there is more than "
+            f"{BASELINE_OUTLIER:g} x the median fold's (a failed baseline fit)"
+        )
+    scores = {c: CandidateScore(c) for c in CAUSES}
+    base_scores = [b for b, _ in kept]
+    ext_scores: dict[str, list[float]] = {c: [] for c in CAUSES}
+    for base_rmse, ext in kept:
+        for cause in CAUSES:
+            scores[cause].add(base_rmse, ext[cause])
+            ext_scores[cause].append(base_rmse if ext[cause] is None else float(ext[cause]))  # type: ignore[arg-type]
     if not base_scores:
         raise DataError(
             f"{m.source}: no fold has held-out rows inside the training input range; record the full "
             "range more than once (or use fewer folds)"
         )
     if skipped:
-        notes.append(f"{skipped} of {folds} folds had fewer than {MIN_BLOCK_SAMPLES} in-range held-out rows and were not scored")
+        notes.append(
+            f"{skipped} of {folds} folds had fewer than {MIN_BLOCK_SAMPLES} in-range held-out rows and were not scored"
+        )
     noise = noise_floor(ctx.y)
     verdict = choose(scores, noise)
     cause = verdict.cause
@@ -284,8 +300,8 @@ TERMS = {
     "transport_delay": "dead time before the hysteresis: x(k - d)",
     "load_dependence": "load terms: y gets e1*L + e2*L*x + e3*L*x^2 (curve) + e4*L*branch (loop width)",
     "temperature_drift": "temperature terms: y gets e1*T + e2*T*x + e3*T*x^2 (curve) + e4*T*branch (loop width)",
-    "slow_drift": "slow drift in time no column explains: two half-cosines over the record shift the curve, "
-    "the first also bends it and changes the loop width",
+    "slow_drift": "slow drift in time no column explains: y gets e1*t + e2*t*x + e3*t*x^2 (curve) + e4*t*branch "
+    "(loop width)",
 }
 
 

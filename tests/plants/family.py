@@ -49,7 +49,7 @@ def cases(plants: tuple[str, ...], duration_s: float = 150.0) -> list[Case]:
                 forms = ("hil",)
             repeats = NONE_PER_PLANT if effect == "none" else 1
             for form in forms:
-                for r in range(repeats):
+                for _ in range(repeats):
                     out.append(
                         Case(plant, effect, form, protocols[i % 4], RATES_HZ[(i // 4 + i) % 4], 100 + i, duration_s)
                     )
@@ -81,6 +81,8 @@ def measurement(case: Case) -> tuple[Measurement, dict[str, object]]:
     params = cores.draw_params(case.plant, rng, peak)
     y, extras, truth = effects.apply(cores.CORES[case.plant], params, u, dt, case.effect, case.form, rng)
     y = y + rng.normal(0.0, NOISE_MM, y.size)
-    extras = {"load": np.round(extras["load"] + rng.normal(0, 0.01, y.size), 3),
-              "temperature": np.round(extras["temperature"] + rng.normal(0, 0.05, y.size), 2)}
+    extras = {
+        "load": np.round(extras["load"] + rng.normal(0, 0.01, y.size), 3),
+        "temperature": np.round(extras["temperature"] + rng.normal(0, 0.05, y.size), 2),
+    }
     return Measurement(np.arange(u.size) * dt, u, y, extras, source=case.name), truth
