@@ -8,6 +8,8 @@ training folds and scored on its held-out folds (the same blocked folds as a sin
 diagnosis):
 
 * ``session_drift``: an offset (the relation moved between sessions; a re-zeroed sensor);
+* ``input_drift``: the input reads shifted (a pressure transducer's zero moved, or the same
+  contraction needs more pressure): the model run on ``u - delta``, plus an offset;
 * ``gain_change``: gain and offset (stiffer or softer, another load);
 * ``transport_delay``: a dead time and offset;
 * ``rate_dependence``: offset plus loop width and stroke scaled by the input speed;
@@ -40,7 +42,17 @@ from host.diagnose.run import MIN_SAMPLES, PREISACH_LEVELS, choose_actuator_lag,
 from host.identify.common import MemoryStart, memory_start
 from host.identify.preisach import EverettGrid, regressor_chunks
 
-CORRECTIONS = ("session_drift", "gain_change", "transport_delay", "rate_dependence", "creep", "hysteresis_change")
+CORRECTIONS = (
+    "session_drift",
+    "input_drift",
+    "gain_change",
+    "transport_delay",
+    "rate_dependence",
+    "creep",
+    "hysteresis_change",
+)
+# input (pressure transducer) zero shifts tried, as shares of the training input range
+INPUT_SHIFTS = (-0.15, -0.1, -0.06, -0.03, 0.03, 0.06, 0.1, 0.15)
 INITIAL_STATE_RATIO = 3.0
 TIE_MARGIN = 0.005
 
@@ -114,10 +126,15 @@ def corrected(
     branch: NDArray[np.float64],
     dt: float,
     train: NDArray[np.bool_],
+    shifted_inputs: list[NDArray[np.float64]] | None = None,
 ) -> NDArray[np.float64]:
-    """``yhat`` with correction ``name`` fitted on ``train`` rows (see the module docstring)."""
+    """``yhat`` with correction ``name`` fitted on ``train`` rows (see the module docstring);
+    ``shifted_inputs``: the model's output with the input shifted by each of :data:`INPUT_SHIFTS`."""
     if name == "session_drift":
         return _linear([], y - yhat, train) + yhat
+    if name == "input_drift":
+        options = shifted_inputs or [yhat]
+        return _best([_linear([], y - p, train) + p for p in options], y, train)
     if name == "gain_change":
         return _linear([yhat], y, train)
     if name == "transport_delay":
@@ -190,12 +207,16 @@ def cross_run(
                 note = "unknown_initial_state: " + note
             notes.append(note)
         branch = branch_offset(test.u, start)[sl]
+        span = grid.hi - grid.lo
+        shifted_inputs = [
+            simulate(model, rows_on_grid(lagged_u - share * span, grid, start), float(y[0])) for share in INPUT_SHIFTS
+        ]
         scores = {c: CandidateScore(c) for c in CORRECTIONS}
         for held in holdout_masks(y.size, folds):
             base = rmse(yhat[held], y[held])
             for name in CORRECTIONS:
                 with np.errstate(all="ignore"):
-                    pred = corrected(name, yhat, rows, u, y, branch, test.dt, ~held)
+                    pred = corrected(name, yhat, rows, u, y, branch, test.dt, ~held, shifted_inputs)
                 scores[name].add(base, rmse(pred[held], y[held]))
         cause, reason = _verdict(scores, noise_floor(y))
         results.append(
