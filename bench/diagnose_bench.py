@@ -1,6 +1,6 @@
 """Benchmark of pmactl diagnose: wall time, CPU time and peak memory against data length.
 
-Usage: python bench/diagnose_bench.py [--quick] [--busy]
+Usage: python bench/diagnose_bench.py [--quick | --long] [--busy]
 
 Each row records the mixed protocol on the HIL at 100 Hz (a creep effect hidden; the 2 000 000
 sample row repeats a 40 000 sample recording end to end) and runs ``pmactl diagnose`` on it in a
@@ -8,7 +8,8 @@ fresh process with the default threading (no *_NUM_THREADS set), reporting wall 
 process's CPU time (user + system) and its peak resident memory. With ``--busy`` another
 CPU-bound process (numpy matrix products with its default BLAS threads) runs throughout, as on a
 shared 2-core machine. Targets: 40 000 samples in <= 15 s and <= 1 GB; 2 000 000 samples finish
-(decimated, with a warning). ``--quick`` stops at 40 000 samples.
+(decimated, with a warning). ``--quick`` stops at 40 000 samples; ``--long`` runs only the
+2 000 000 sample row.
 """
 
 from __future__ import annotations
@@ -69,6 +70,8 @@ def recording(n: int, tmp: Path) -> Path:
 
 def main(argv: list[str]) -> int:
     lengths = [n for n in LENGTHS if n <= 40_000] if "--quick" in argv else list(LENGTHS)
+    if "--long" in argv:
+        lengths = [LENGTHS[-1]]
     env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
     busy = subprocess.Popen([sys.executable, "-c", BUSY], env=env) if "--busy" in argv else None
     print(f"another CPU-bound process running: {'yes' if busy else 'no'}; cores: {os.cpu_count()}")
