@@ -34,7 +34,7 @@ STATIC_ROWS = 10_000
 # ridge on the cell masses (relative to the mean diagonal of the normal equations): cells that few
 # training rows visit would otherwise take masses that only those rows support, and a held-out
 # block that visits them gets errors of several times the training error
-MASS_RIDGE = float(__import__("os").environ.get("PMACTL_MASS_RIDGE", "1e-3"))
+MASS_RIDGE = 1e-3
 
 
 @dataclass

@@ -199,6 +199,7 @@ def _diagnose(
     masks = holdout_masks(n, folds, blocks_per_fold)
     fold_rmse: list[tuple[float, dict[str, float | None]]] = []
     skipped = 0
+    scored_rows = 0
     with _progress(1 + folds * (1 + len(CAUSES)), progress) as bar:
         ctx.lag_s = choose_actuator_lag(ctx)
         bar.update()
@@ -206,6 +207,7 @@ def _diagnose(
             ctx.train = ~held
             baseline = fit_baseline(ctx)
             scored = in_range(ctx.u, ctx.rows, ctx.train, held)
+            scored_rows += int(scored.sum())
             bar.update()
             if scored.sum() < MIN_BLOCK_SAMPLES:
                 skipped += 1
@@ -264,7 +266,7 @@ def _diagnose(
             reason += "; the baseline's residual is white: what remains looks like noise"
     baseline_rmse = float(np.mean(base_scores))
     extended_rmse = float(np.mean(ext_scores[cause])) if cause != "none" else baseline_rmse
-    scored_share = 1.0
+    scored_share = scored_rows / n  # every row is held out once
     return Diagnosis(
         cause=cause,
         scores={c: s.mean for c, s in scores.items()},
@@ -276,7 +278,7 @@ def _diagnose(
             f"hysteresis memory is known), dealt to {folds} folds in turn ({blocks_per_fold} blocks of "
             f"{n * ctx.dt / (folds * blocks_per_fold):.0f} s each); each fold held out once, models fitted on "
             "the other folds' blocks, simulated over the whole record and scored on held-out rows inside the "
-            f"training input range; RMSE averaged over the folds (scored share {scored_share:.0%})"
+            f"training input range; RMSE averaged over the folds ({scored_share:.0%} of the held-out rows were in range and scored)"
         ),
         extended_model=_describe(extended_full, ctx) if extended_full else {"name": "baseline (no extension)"},
         reason=reason,
