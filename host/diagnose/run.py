@@ -278,7 +278,7 @@ def _diagnose(
             f"hysteresis memory is known), dealt to {folds} folds in turn ({blocks_per_fold} blocks of "
             f"{n * ctx.dt / (folds * blocks_per_fold):.0f} s each); each fold held out once, models fitted on "
             "the other folds' blocks, simulated over the whole record and scored on held-out rows inside the "
-            f"training input range; RMSE averaged over the folds ({scored_share:.0%} of the held-out rows were in range and scored)"
+            f"identified range ({scored_share:.0%} of the rows); RMSE averaged over the folds"
         ),
         extended_model=_describe(extended_full, ctx) if extended_full else {"name": "baseline (no extension)"},
         reason=reason,
