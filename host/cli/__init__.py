@@ -82,14 +82,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     fit.set_defaults(run=_lazy("host.cli.fit"))
 
-    diag = sub.add_parser(
-        "diagnose", help="what the simulation gets wrong on a recording: name the cause, extend, measure the gain"
-    )
-    diag.add_argument("data", metavar="DATA.csv", help="measured data (t, u, y; optional load, temperature, p)")
-    diag.add_argument("--report", metavar="DIR", help="write report.md and PNG figures here")
-    diag.add_argument("--json", metavar="OUT.json", help="write the result as JSON")
-    diag.add_argument("--folds", type=int, default=4, help="blocked held-out folds in time (default 4)")
-    diag.set_defaults(run=_lazy("host.cli.diagnose"))
+    importlib.import_module("host.cli.diagnose").register(sub)
 
     edge = sub.add_parser("edge", help="the control loop that runs on the rig's computer")
     edge_sub = edge.add_subparsers(dest="edge_command", required=True, metavar="EDGE_COMMAND")

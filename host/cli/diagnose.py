@@ -1,41 +1,115 @@
-"""``pmactl diagnose``: name what the simulation gets wrong on a recording and measure the fix."""
+"""``pmactl diagnose``: name what the simulation gets wrong on a recording and measure the fix.
+
+``pmactl diagnose DATA.csv``: one record, blocked held-out folds. ``pmactl diagnose --train
+A.csv --test B.csv [--test C.csv]``: what a model identified on A gets wrong on B.
+"""
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from edge.errors import DataError
-from host.data import load_measurement
-from host.diagnose.run import CAUSES, diagnose
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``diagnose`` subcommand (imported lazily: ``--help`` needs only the standard library)."""
+    diag = sub.add_parser(
+        "diagnose", help="what the simulation gets wrong on a recording: name the cause, extend, measure the gain"
+    )
+    diag.add_argument("data", nargs="?", metavar="DATA.csv", help="measured data (t, u, y; optional load, temperature)")
+    diag.add_argument("--train", metavar="A.csv", help="cross-run: identify on this recording ...")
+    diag.add_argument("--test", action="append", default=[], metavar="B.csv", help="... and check it here (repeatable)")
+    diag.add_argument("--report", metavar="DIR", help="write report.md and PNG figures here")
+    diag.add_argument("--json", metavar="OUT.json", help="write the result as JSON ('-' for stdout)")
+    diag.add_argument("--folds", type=int, default=4, help="blocked held-out folds in time (default 4)")
+
+    def run_lazily(args: argparse.Namespace) -> int:
+        return run(args)
+
+    diag.set_defaults(run=run_lazily)
+
+
+def _write_json(target: str, payload: object) -> None:
+    text = json.dumps(payload, indent=2, default=float) + "\n"
+    if target == "-":
+        sys.stdout.write(text)
+        return
+    Path(target).parent.mkdir(parents=True, exist_ok=True)
+    Path(target).write_text(text)
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.folds < 2:
+        raise DataError(f"--folds {args.folds}: a held-out comparison needs at least 2 folds; use 2-10 (default 4)")
+    to_stdout = args.json == "-"
+    progress = False if to_stdout else None
+    say = (lambda *a: print(*a, file=sys.stderr)) if to_stdout else print
+    if args.train or args.test:
+        if not (args.train and args.test) or args.data:
+            raise DataError("cross-run diagnosis takes --train A.csv and at least one --test B.csv, and no DATA.csv")
+        return _cross_run(args, say, progress)
+    if not args.data:
+        raise DataError("name a recording (pmactl diagnose DATA.csv) or use --train A.csv --test B.csv")
+    from host.data import load_measurement
+    from host.diagnose.run import diagnose
+
     measurement = load_measurement(args.data)
-    result = diagnose(measurement, folds=args.folds)
+    result = diagnose(measurement, folds=args.folds, progress=progress)
     name = Path(args.data).name
-    print(f"{name}: cause {result.cause}")
-    print(f"  {result.reason}")
-    print(
-        f"  held-out RMSE: baseline {result.baseline_rmse:.4g}, extended {result.extended_rmse:.4g} "
-        f"(gain {result.gain:.0%})"
+    say(f"{name}: cause {result.cause}")
+    say(f"  {result.reason}")
+    say(f"  decided by: {result.decided_by}")
+    conf = result.confidence
+    say(
+        f"  confidence: {conf['over_threshold']:+.1%} over its threshold, {conf['over_runner_up']:+.1%} over the "
+        f"runner-up ({conf['runner_up']})"
     )
-    print(f"  {'candidate':<18} {'gain':>7}  per fold")
-    for cause in CAUSES:
-        folds = " ".join(f"{g:+.1%}" for g in result.fold_gains[cause])
-        print(f"  {cause:<18} {result.scores[cause]:>+7.1%}  {folds}")
-    for note in measurement.notes:
-        print(f"  note: {note}")
+    say(
+        f"  held-out RMSE: baseline {result.baseline_rmse:.4g}, extended {result.extended_rmse:.4g} "
+        f"(gain {result.gain:.0%}); noise floor {conf['noise_floor']:.3g}"
+    )
+    say(f"  {'candidate':<18} {'gain':>7}  per fold")
+    for cause, gains in result.fold_gains.items():
+        folds = " ".join(f"{g:+.1%}" for g in gains)
+        say(f"  {cause:<18} {result.scores[cause]:>+7.1%}  {folds}")
+    for note in measurement.notes + result.notes:
+        say(f"  note: {note}")
     try:
         if args.json:
-            Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-            Path(args.json).write_text(json.dumps(result.as_json(), indent=2) + "\n")
-            print(f"  JSON written to {args.json}")
+            _write_json(args.json, result.as_json())
+            if not to_stdout:
+                say(f"  JSON written to {args.json}")
         if args.report:
             from host.diagnose.report import write_report
 
-            print(f"  report written to {write_report(result, args.report, name)}")
+            say(f"  report written to {write_report(result, args.report, name)}")
     except OSError as exc:
         raise DataError(f"cannot write the results ({exc}); choose a writable --json / --report path") from exc
+    return 0
+
+
+def _cross_run(args: argparse.Namespace, say: Callable[..., None], progress: bool | None) -> int:
+    from host.data import load_measurement
+    from host.diagnose.crossrun import cross_run
+
+    train = load_measurement(args.train)
+    tests = [load_measurement(path) for path in args.test]
+    results = cross_run(train, tests, progress=progress)
+    for path, result in zip(args.test, results):
+        say(f"{Path(args.train).name} -> {Path(path).name}: cause {result.cause}")
+        say(f"  {result.reason}")
+        say(f"  {'correction':<22} {'gain':>7}  per fold")
+        for name, gains in result.fold_gains.items():
+            say(f"  {name:<22} {result.scores[name]:>+7.1%}  {' '.join(f'{g:+.1%}' for g in gains)}")
+        for note in result.notes:
+            say(f"  note: {note}")
+    if args.json:
+        try:
+            _write_json(args.json, [r.as_json() for r in results])
+        except OSError as exc:
+            raise DataError(f"cannot write the results ({exc}); choose a writable --json path") from exc
     return 0

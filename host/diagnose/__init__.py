@@ -1,7 +1,9 @@
 """``pmactl diagnose``: what the simulation gets wrong on measured data, why, and what fixing it gains.
 
-``features``: the regressors (Preisach hysteresis rows, rate, creep, load, temperature, delay).
-``hammerstein``: the baseline (hysteresis + ARX, orders by AIC) and its extensions.
-``evidence``: residual diagnostics. ``run``: the held-out comparison and the verdict.
+``features``: the regressors (Preisach rows, rate, creep, branch). ``hammerstein``: the baseline
+(hysteresis + ARX, orders by AIC). ``candidates``: the extensions, one physical term each.
+``folds``: held-out blocks, the in-range rows each fold is scored on, the noise floor.
+``decide``: the calibrated verdict and its confidence. ``run``: one record. ``crossrun``: a
+model identified on one record checked on others. ``evidence``: residual diagnostics.
 ``report``: Markdown + figures.
 """

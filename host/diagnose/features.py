@@ -17,7 +17,7 @@ from host.identify.common import MemoryStart
 from host.identify.preisach import EverettGrid, regressor_chunks
 
 
-def preisach_rows(u: NDArray[np.float64], start: MemoryStart, levels: int) -> NDArray[np.float64]:
+def preisach_rows(u: NDArray[np.float64], start: MemoryStart, levels: int) -> NDArray[np.float32]:
     """Dense Preisach regressors (rows from ``start.index`` on), float32 to keep memory low."""
     grid = EverettGrid(float(u.min()), float(u.max()), levels)
     rows = np.zeros((u.size - start.index, grid.size), dtype=np.float32)

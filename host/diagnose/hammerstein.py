@@ -31,6 +31,10 @@ from host.diagnose.features import slow_part
 ORDERS = [(na, 1) for na in (0, 1, 2)]
 MAX_TIME_CONSTANT_S = 2.0
 STATIC_ROWS = 10_000
+# ridge on the cell masses (relative to the mean diagonal of the normal equations): cells that few
+# training rows visit would otherwise take masses that only those rows support, and a held-out
+# block that visits them gets errors of several times the training error
+MASS_RIDGE = 1e-3
 
 
 @dataclass
@@ -45,9 +49,11 @@ class FittedModel:
     exogenous: NDArray[np.float64]
     extra: dict[str, float] = field(default_factory=dict)
     columns: list[str] = field(default_factory=list)
+    masses: NDArray[np.float64] | None = None  # Preisach cell masses when the model has a hysteresis
+    x_shift: float = 0.0  # x = rows @ masses + x_shift
 
 
-def static_masses(rows: NDArray[np.float64], y: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np.float64]:
+def static_masses(rows: NDArray[np.floating], y: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np.float64]:
     """Cell masses >= 0 with ``y ~ rows @ masses + offset`` on ``train`` rows.
 
     The offset is eliminated by centring, then NNLS runs on the Cholesky factor of the centred
@@ -62,7 +68,7 @@ def static_masses(rows: NDArray[np.float64], y: NDArray[np.float64], train: NDAr
     centred = y[chosen] - y[chosen].mean()
     gram = design.T @ design
     scale = max(float(np.trace(gram)) / len(gram), 1e-300)
-    for ridge in (1e-8, 1e-6, 1e-4, 1e-2):  # cells no training row visits make gram singular
+    for ridge in (MASS_RIDGE, 1e-2):  # cells no training row visits make gram singular
         try:
             factor = np.linalg.cholesky(gram + ridge * scale * np.eye(len(gram)))
             break
@@ -74,10 +80,13 @@ def static_masses(rows: NDArray[np.float64], y: NDArray[np.float64], train: NDAr
     return masses
 
 
-def fit_static(rows: NDArray[np.float32], y: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np.float64]:
-    """Hysteresis output ``x`` for the whole record, fitted as if there were no dynamics."""
-    x = rows.astype(np.float64) @ static_masses(rows, y, train)
-    return x - x[train].mean() + y[train].mean()
+def fit_static(
+    rows: NDArray[np.float32], y: NDArray[np.float64], train: NDArray[np.bool_]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Hysteresis output ``x`` for the whole record, fitted as if there were no dynamics, and its masses."""
+    masses = static_masses(rows, y, train)
+    x = rows.astype(np.float64) @ masses
+    return x - x[train].mean() + y[train].mean(), masses
 
 
 def fit_hammerstein(
@@ -106,8 +115,10 @@ def fit_hammerstein(
             return fit_arx(name, x, y, train, dt=dt)
         return fit_arx(name, x, y, train, slow_part(x, dt, creep_tau_s)[:, None], ["creep"], dt)
 
-    x = fit_static(rows, y, train)
+    x, masses = fit_static(rows, y, train)
     model = arx(x)
+    model.masses = masses
+    model.x_shift = float(x[0] - dense_first(rows) @ masses)
     dense = rows.astype(np.float64)
     creep_rows = slow_part(dense, dt, creep_tau_s) if creep_tau_s is not None else None
     for _ in range(iterations):
@@ -121,10 +132,15 @@ def fit_hammerstein(
         masses = static_masses(filtered, y, train)
         x_new = dense @ masses
         candidate = arx(x_new)
+        candidate.masses = masses
         if rmse(candidate.prediction[train], y[train]) >= rmse(model.prediction[train], y[train]):
             break
         model, x = candidate, x_new
     return model, x
+
+
+def dense_first(rows: NDArray[np.float32]) -> NDArray[np.float64]:
+    return np.asarray(rows[0], dtype=np.float64)
 
 
 def _filter_columns(
@@ -164,7 +180,7 @@ def fit_arx(
         past_y = _lagged(y, range(1, na + 1)) if na else np.zeros((y.size, 0))
         inputs = _lagged(x, range(0, nb))
         design = np.column_stack([past_y, inputs, extra, np.ones(y.size)])
-        theta, *_ = np.linalg.lstsq(design[usable], y[usable], rcond=None)
+        theta = np.asarray(np.linalg.lstsq(design[usable], y[usable], rcond=None)[0], dtype=np.float64)
         ar = theta[:na]
         if na and np.any(np.abs(np.roots(np.r_[1.0, -ar])) >= pole_limit):
             continue  # unstable, or slower than the rig's mechanics (slow relaxation is creep)

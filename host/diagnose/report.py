@@ -56,13 +56,13 @@ def _scores(d: Diagnosis, path: Path) -> None:
     fig, ax = plt.subplots(figsize=(7, 3.4))
     names = list(CAUSES)
     for i, name in enumerate(names):
-        gains = d.fold_gains[name]
-        ax.bar(i, np.mean(gains), color="tab:red" if name == d.cause else "0.6")
+        gains = [g for g in d.fold_gains[name] if np.isfinite(g) and g > -1.0]
+        ax.bar(i, d.scores[name], color="tab:red" if name == d.cause else "0.6")
         ax.plot([i] * len(gains), gains, "k.", ms=4)
-    ax.axhline(0.05, ls="--", color="k", lw=0.8)
+    ax.axhline(0.0, color="k", lw=0.6)
     ax.set_xticks(range(len(names)), [n.replace("_", "\n") for n in names], fontsize=8)
     ax.set_ylabel("held-out RMSE reduction")
-    ax.set_title("before/after: gain of each extension (bars: mean, dots: folds, dashed: 5 %)")
+    ax.set_title("held-out gain of each extension (bars: mean, dots: folds; failed fits left out)", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
@@ -76,12 +76,14 @@ def write_report(d: Diagnosis, directory: str | Path, source: str) -> Path:
     _residuals(d, out / "residuals.png")
     _scores(d, out / "scores.png")
     rows = "\n".join(
-        f"| {c} | {d.scores[c]:+.1%} | {', '.join(f'{g:+.1%}' for g in d.fold_gains[c])} |" for c in CAUSES
+        f"| {c} | {d.scores[c]:+.1%} | {', '.join(f'{g:+.1%}' for g in d.fold_gains[c])} |" for c in d.fold_gains
     )
     baseline = {"na": d.baseline_full.na, "ar": [float(a) for a in d.baseline_full.ar], **d.baseline_full.extra}
     text = f"""# Diagnosis of `{source}`
 
 **Cause: `{d.cause}`.** {d.reason}.
+
+Decided by: {d.decided_by}. Confidence: {json.dumps(d.confidence)}.
 
 Held-out RMSE: baseline {d.baseline_rmse:.4g}, extended {d.extended_rmse:.4g} (gain {d.gain:.0%}).
 Held-out data: {d.holdout}.

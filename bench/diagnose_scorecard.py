@@ -1,0 +1,108 @@
+"""Scorecard of ``pmactl diagnose`` on the test-plant family (tests/plants): tuning and held-out sets.
+
+Usage: python bench/diagnose_scorecard.py [--set tuning|held_out|both] [--duration S] [--json OUT]
+
+Prints one line per record (plant, effect:form, protocol, rate, verdict, confidence, held-out
+gain, CPU seconds) and a table per set: effects named / missed per plant and effect, false alarms
+on the effect-free records, median held-out gain when named. The held-out set was fixed before
+any tuning (tests/plants/family.py) and is not used to choose anything.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from host.diagnose.run import diagnose  # noqa: E402
+from tests.plants.family import Case, held_out_cases, measurement, tuning_cases  # noqa: E402
+
+
+def score(case_list: list[Case]) -> list[dict[str, object]]:
+    rows = []
+    for case in case_list:
+        m, _truth = measurement(case)
+        start = time.process_time()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            d = diagnose(m, progress=False)
+        cpu = time.process_time() - start
+        row = {
+            "case": case.name,
+            "plant": case.plant,
+            "effect": case.effect,
+            "form": case.form,
+            "verdict": d.cause,
+            "gain": d.gain,
+            "confidence": d.confidence,
+            "cpu_s": cpu,
+            "samples": len(m),
+        }
+        rows.append(row)
+        ok = "ok " if d.cause == case.effect else "MISS" if case.effect != "none" else "FALSE"
+        print(
+            f"{ok:<5} {case.name:<58} -> {d.cause:<18} gain {d.gain:6.1%} "
+            f"margin {d.confidence['over_threshold']:+.3f} cpu {cpu:5.1f}s  ({d.decided_by})",
+            flush=True,
+        )
+    return rows
+
+
+def table(title: str, rows: list[dict[str, object]]) -> None:
+    print(f"\n## {title}")
+    by: dict[tuple[str, str], list[bool]] = defaultdict(list)
+    for r in rows:
+        if r["effect"] != "none":
+            by[(str(r["effect"]), str(r["plant"]))].append(r["verdict"] == r["effect"])
+    plants = sorted({str(r["plant"]) for r in rows})
+    print(f"| effect | {' | '.join(plants)} |")
+    print("|---|" + "---|" * len(plants))
+    for effect in sorted({e for e, _ in by}):
+        cells = [f"{sum(by[(effect, p)])}/{len(by[(effect, p)])}" if by[(effect, p)] else "-" for p in plants]
+        print(f"| {effect} | {' | '.join(cells)} |")
+    effect_rows = [r for r in rows if r["effect"] != "none"]
+    named = [r for r in effect_rows if r["verdict"] == r["effect"]]
+    nones = [r for r in rows if r["effect"] == "none"]
+    false = [r for r in nones if r["verdict"] != "none"]
+    gains = [float(r["gain"]) for r in named]  # type: ignore[arg-type]
+    cpu = [float(r["cpu_s"]) for r in rows]  # type: ignore[arg-type]
+    print(
+        f"\nnamed {len(named)}/{len(effect_rows)} ({len(named) / max(1, len(effect_rows)):.0%}); "
+        f"false alarms {len(false)}/{len(nones)}; median held-out gain when named "
+        f"{np.median(gains) if gains else float('nan'):.1%}; "
+        f"CPU median {np.median(cpu):.1f} s, max {max(cpu):.1f} s"
+    )
+    wrong = [r for r in effect_rows if r["verdict"] != r["effect"]]
+    for r in wrong + false:
+        print(f"  wrong: {r['case']} -> {r['verdict']}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--set", choices=["tuning", "held_out", "both"], default="both")
+    parser.add_argument("--duration", type=float, default=150.0, metavar="S")
+    parser.add_argument("--only", help="run only cases whose name contains this text")
+    parser.add_argument("--json", type=Path, help="write every row here")
+    args = parser.parse_args(argv)
+    results: dict[str, list[dict[str, object]]] = {}
+    for name, maker in (("tuning", tuning_cases), ("held_out", held_out_cases)):
+        if args.set in (name, "both"):
+            chosen = [c for c in maker(args.duration) if not args.only or args.only in c.name]
+            results[name] = score(chosen)
+    for name, rows in results.items():
+        table(f"{name} set ({'plants we tuned on' if name == 'tuning' else 'never tuned on'})", rows)
+    if args.json:
+        args.json.write_text(json.dumps(results, indent=2, default=float) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
