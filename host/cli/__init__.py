@@ -13,9 +13,8 @@ import sys
 import warnings
 from collections.abc import Callable, Sequence
 
+from edge import cli as edge_cli
 from edge.errors import PmactlError
-from hil.effects import EFFECTS
-from hil.scenarios import SCENARIOS
 
 HOST_ONLY_MODULES = {"scipy", "matplotlib"}
 EDGE_MODULES = {"onnxruntime", "smbus2", "serial", "gpiod"}
@@ -37,6 +36,9 @@ def _hil_serve(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from hil.effects import EFFECTS  # here, not at the top: pmactl edge never imports hil
+    from hil.scenarios import SCENARIOS
+
     parser = argparse.ArgumentParser(
         prog="pmactl",
         description="Pneumatic muscle actuator control: hysteresis identification, models, deployment.",
@@ -87,30 +89,7 @@ def build_parser() -> argparse.ArgumentParser:
     diag.add_argument("--folds", type=int, default=4, help="blocked held-out folds in time (default 4)")
     diag.set_defaults(run=_lazy("host.cli.diagnose"))
 
-    edge = sub.add_parser("edge", help="the control loop that runs on the rig's computer")
-    edge_sub = edge.add_subparsers(dest="edge_command", required=True, metavar="EDGE_COMMAND")
-    erun = edge_sub.add_parser("run", help="run the fixed-rate control loop on the rig a config names")
-    erun.add_argument("--config", required=True, metavar="RIG.toml", help="rig config (docs/examples/*.toml)")
-    erun.add_argument("--bundle", required=True, metavar="DIR", help="model bundle written by pmactl fit --save")
-    erun.add_argument("--duration", type=float, metavar="S", help="seconds to run (default: the reference's length)")
-    erun.add_argument(
-        "--reference",
-        default="sine:amplitude=30,frequency=0.2,offset=40",
-        metavar="SPEC",
-        help="desired contraction: sine:amplitude=,frequency=,offset= | ramp-sine:peak=,frequency=,offset=,rise=,hold= "
-        "| const:value= | a CSV with t,y_ref (default: seed 000's 30 sin(2 pi 0.2 t) + 40 mm)",
-    )
-    erun.add_argument("--no-feedforward", action="store_true", help="PID alone (no inverse-hysteresis feedforward)")
-    erun.add_argument("--no-correction", action="store_true", help="ignore the bundle's ONNX correction")
-    erun.add_argument("--settle", type=float, default=0.0, metavar="S", help="leave the first S seconds unscored")
-    erun.add_argument("--telemetry", metavar="FILE", help="write per-tick telemetry here (+ FILE.events.jsonl)")
-    erun.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    erun.set_defaults(run=_lazy("host.cli.edge"))
-    etel = edge_sub.add_parser("telemetry", help="turn a telemetry file into CSV and a plot")
-    etel.add_argument("file", metavar="FILE", help="telemetry written by pmactl edge run --telemetry")
-    etel.add_argument("--csv", metavar="OUT.csv")
-    etel.add_argument("--plot", metavar="OUT.png")
-    etel.set_defaults(run=_lazy("host.cli.edge", "telemetry"))
+    edge_cli.register(sub)
 
     hil = sub.add_parser("hil", help="the emulated rig: recordings with hidden effects")
     hil_sub = hil.add_subparsers(dest="hil_command", required=True, metavar="HIL_COMMAND")
@@ -141,7 +120,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``pmactl`` console script."""
-    args = build_parser().parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    # the SBC path: pmactl edge ... parses with the edge subcommands alone (no hil, no host tools)
+    args = (edge_cli.build_parser(prog="pmactl") if argv[:1] == ["edge"] else build_parser()).parse_args(argv)
     run: Callable[[argparse.Namespace], int] = args.run
     warnings.showwarning = _one_line_warning
     try:
