@@ -269,6 +269,9 @@ class EdgeRuntime:
         try:
             if config.loop.realtime and not rig.lockstep:
                 realtime = apply_realtime(config.loop.priority, config.loop.cpu)
+            gc.collect()
+            gc.freeze()  # everything allocated so far is permanent: the loop allocates ~nothing
+            frozen = True
             frame = self.frame
             rig.read(frame)
             failed = [dev for dev, rd, _ in self.layout.status_fields if getattr(frame, rd)]
@@ -278,15 +281,12 @@ class EdgeRuntime:
             self.supervisor.arm(Readings(frame.contraction_mm, frame.pressure_bar))
             if telemetry:
                 telemetry.event(0.0, "arm", f"armed at {frame.contraction_mm:.2f} mm; {'; '.join(realtime.notes)}")
-            rig.prepare(frame)
-            if not rig.lockstep:
-                watchdog = Watchdog(rig, config.loop.watchdog_s)
             n_max = int(math.ceil(duration / period)) + 1 if duration is not None else 0
             if self.profile:
                 self.phase_ns = np.zeros((max(n_max, 1), len(PHASES)), dtype=np.int64)
-            gc.collect()
-            gc.freeze()  # everything allocated so far is permanent: the loop allocates ~nothing
-            frozen = True
+            if not rig.lockstep:
+                watchdog = Watchdog(rig, config.loop.watchdog_s)
+            rig.prepare(frame)
             scheduler.start()
             self._loop(scheduler, duration, telemetry, watchdog, errors, faults)
         finally:

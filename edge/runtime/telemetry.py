@@ -61,6 +61,9 @@ class TelemetryWriter:
         self.path = Path(path)
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise DataError(f"{self.path}: cannot write telemetry ({exc.strerror}); choose a writable path") from exc
+        try:
             self._file = self.path.open("xb")
         except FileExistsError as exc:
             raise DataError(
