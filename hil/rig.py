@@ -137,7 +137,7 @@ class HilRig:
         """What the valve is asked for now [bar]."""
         if self.faults.valve_stuck_bar is not None:
             return self.faults.valve_stuck_bar
-        if not self.gpio.get("valve_enable"):
+        if not self.gpio.level("valve_enable"):
             return 0.0  # vented
         return valve_command_bar(self.dac.output_volts, self.wiring.valve_bar_per_volt)
 

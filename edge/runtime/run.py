@@ -218,6 +218,7 @@ class EdgeRuntime:
         self.phase_ns: np.ndarray | None = None
         self.stop_requested = threading.Event()
         self._device_error_ticks = 0  # ticks on which some device reported an error
+        self.telemetry: TelemetryWriter | None = None  # the open writer while running
         self.on_tick: list[Callable[[float], None]] = []  # run before each tick's read (tests inject faults)
 
     def _header(self) -> dict[str, object]:
@@ -260,6 +261,7 @@ class EdgeRuntime:
         except BaseException:
             rig.close()
             raise
+        self.telemetry = telemetry
         realtime = RealtimeSettings(notes=["lockstep (simulated clock)"] if rig.lockstep else ["real-time disabled"])
         watchdog = None
         faults: list[str] = []

@@ -40,6 +40,10 @@ class EmulatedGpio:
             raise BusError(errno.EPERM, f"GPIO line {name!r} is not an output")
         self._values[name] = bool(value)
 
+    def level(self, name: str) -> bool:
+        """The rig side: what a line is at, whatever faults the edge's access meets."""
+        return self._values[name]
+
     def drive_input(self, name: str, value: bool) -> None:
         """The rig side: set an input line (e.g. press the e-stop)."""
         if name in self._outputs or name not in self._values:
