@@ -137,8 +137,12 @@ def _open_sim(buses: list[BusSpec], config: RigConfig) -> SimBackend:
     return backend
 
 
-def open_rig(config: RigConfig, layout: FrameLayout) -> Rig:
-    """Open every bus and device of ``config.rig`` (see the module docstring)."""
+def open_rig(config: RigConfig, layout: FrameLayout, clock: Clock | None = None, lockstep: bool = False) -> Rig:
+    """Open every bus and device of ``config.rig`` (see the module docstring).
+
+    ``clock`` / ``lockstep``: run a rig without ``sim://`` buses on another clock (a HIL that
+    serves a real pty on its simulated clock); by default the sim backend's clock, else the
+    wall clock."""
     spec = config.rig
     drivers = installed_drivers()
     sim_buses = [b for b in spec.buses if b.scheme == "sim"]
@@ -148,7 +152,10 @@ def open_rig(config: RigConfig, layout: FrameLayout) -> Rig:
         sim = _open_sim(sim_buses, config) if sim_buses else None
         if sim is not None:
             opened.append(sim)
-        clock: Clock = sim.clock if sim is not None else MonotonicClock()
+        if clock is None:
+            clock = sim.clock if sim is not None else MonotonicClock()
+        else:
+            lockstep = lockstep or (sim is not None and sim.lockstep)
         handles: dict[str, Any] = {}
         for bus in spec.buses:
             if bus.scheme != "sim":
@@ -166,4 +173,4 @@ def open_rig(config: RigConfig, layout: FrameLayout) -> Rig:
             except Exception:  # noqa: BLE001 - best effort while failing to open
                 pass
         raise
-    return Rig(devices, clock, sim.lockstep if sim is not None else False, layout, spec, sim, opened)
+    return Rig(devices, clock, lockstep or (sim.lockstep if sim is not None else False), layout, spec, sim, opened)

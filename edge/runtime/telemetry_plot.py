@@ -4,12 +4,19 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from edge.errors import DataError
 from edge.runtime.telemetry_read import Telemetry
 
 
 def plot(record: Telemetry, path: Path) -> None:
     """Contraction vs reference, the command and its parts, lateness; written to ``path``."""
-    import matplotlib
+    try:
+        import matplotlib
+    except ImportError as exc:
+        raise DataError(
+            "--plot needs matplotlib, which the SBC install leaves out (pip install 'pmactl[host]'); "
+            "--csv and --mcap work without it"
+        ) from exc
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
