@@ -105,6 +105,8 @@ class Controller:
         )
         self._last_bar = 0.0
         self._last_reference = math.nan
+        self.reference_mm_ = math.nan  # of the latest tick
+        self.bias_bar_ = 0.0  # feedforward + correction of the latest tick
 
     def arm(self, readings: Readings, pressure_bar: float = 0.0) -> None:
         """Bumpless start from the present state (feedforward memory reset to the rest state)."""
@@ -119,29 +121,40 @@ class Controller:
     def fill(self, frame: Any, dt: float) -> None:
         """Set ``reference_mm``, ``u_ff_bar``, ``u_nn_bar``, ``u_fb_bar`` and ``u_bar`` of
         ``frame`` from its ``t`` [s], ``contraction_mm`` and ``pressure_bar``; ``dt`` [s]."""
-        reference = self.reference(frame.t)
+        self.fill_from(frame, dt, frame.t, frame.contraction_mm, frame.pressure_bar)
+
+    def fill_from(self, frame: Any, dt: float, t: float, y: float, p: float) -> float:
+        """:meth:`fill` with the readings already at hand (the supervisor has them); returns
+        the command ``u_bar`` and keeps ``reference_mm_`` and ``bias_bar_`` (feedforward +
+        correction) as attributes, so no per-tick object is built."""
+        reference = self.reference(t)
         feedforward = self.inverse.step(reference) if self.inverse is not None else 0.0
         correction = 0.0
-        y = frame.contraction_mm
         if self.correction is not None:
             last = self._last_reference
             rate = (reference - last) / dt if last == last and dt > 0 else 0.0
-            values = (reference, rate, feedforward, y, frame.pressure_bar, self._last_bar)
-            correction = self.correction.step(values)
-        self._last_reference = reference
-        frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar = reference, feedforward, correction
-        bias = feedforward + correction
+            correction = self.correction.step((reference, rate, feedforward, y, p, self._last_bar))
+        self._last_reference = self.reference_mm_ = reference
+        bias = self.bias_bar_ = feedforward + correction
         if not math.isfinite(bias):  # the supervisor trips on it; keep the PID state clean
-            frame.u_fb_bar, frame.u_bar = 0.0, math.nan
-            return
-        total = self.pid.step(reference, y, dt, bias=bias)
-        frame.u_fb_bar = total - bias
+            frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar, frame.u_bar = (
+                reference, feedforward, correction, 0.0, math.nan
+            )
+            return math.nan
+        total = self.pid.step(reference, y, dt, bias)
+        feedback = total - bias
         lim, last_bar = self.limits, self._last_bar
         step = lim.slew_bar_per_s * dt
-        total = min(max(total, last_bar - step), last_bar + step)
+        if total > last_bar + step:
+            total = last_bar + step
+        elif total < last_bar - step:
+            total = last_bar - step
         command = min(max(total, lim.pressure_min_bar), lim.pressure_max_bar)
         self._last_bar = command
-        frame.u_bar = command
+        frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar, frame.u_bar = (
+            reference, feedforward, correction, feedback, command
+        )
+        return command
 
     def tick(self, t: float, dt: float, readings: Readings) -> Command:
         """The command for time ``t`` [s] after a tick of ``dt`` [s]; no I/O, no clock."""

@@ -35,6 +35,7 @@ class FrameLayout:
     dtype: np.dtype
     channel_fields: tuple[str, ...]
     status_fields: tuple[tuple[str, str, str], ...]  # (device, read field, write field)
+    status_offset: int  # bytes: where the rd_/wr_ fields start (they are contiguous)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -46,6 +47,14 @@ class FrameLayout:
         for name in self.channel_fields:
             setattr(frame, name, float("nan"))
         return frame
+
+    def status_view(self, frame: Any) -> Any:
+        """A ctypes byte array over every ``rd_*`` / ``wr_*`` field of ``frame`` (all zero: all ok)."""
+        return (ctypes.c_char * (self.dtype.itemsize - self.status_offset)).from_buffer(frame, self.status_offset)
+
+    def bytes_view(self, frame: Any) -> memoryview:
+        """The frame's memory as bytes (telemetry copies it whole)."""
+        return memoryview(frame).cast("B")
 
     def as_array(self, frame: Any) -> np.ndarray:
         """The frame's memory as a one-row numpy structured array (no copy)."""
@@ -75,4 +84,5 @@ def frame_layout(rig: RigSpec) -> FrameLayout:
     dtype = np.dtype([(n, "<f8") for n in floats] + [(n, "<i4") for n in ints])
     if dtype.itemsize != ctypes.sizeof(cls):
         raise RuntimeError("frame layout: ctypes and numpy disagree on the row size")
-    return FrameLayout(cls, dtype, tuple(channel_fields), tuple(status))
+    status_offset = 8 * len(floats) + 4 * len(CODE_FIELDS)
+    return FrameLayout(cls, dtype, tuple(channel_fields), tuple(status), status_offset)

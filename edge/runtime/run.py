@@ -37,7 +37,7 @@ from edge.runtime.scheduler import RealtimeSettings, TickScheduler, apply_realti
 from edge.runtime.telemetry import TelemetryWriter
 
 SPIN_S = 300e-6  # poll the clock for the last 300 us before a deadline (wall clock only)
-PHASES = ("read", "control", "write", "log")
+PHASES = ("read", "control", "write", "log", "cpu")  # wall ns per phase; "cpu": thread CPU ns of control + log
 RUNNING_CODE = STATE_CODES[State.RUNNING]
 
 
@@ -162,7 +162,8 @@ class EdgeRuntime:
         telemetry_path: where to write telemetry (None: none); ``{time}`` in it becomes the
             start time (UTC), so a service writes a new file per run.
         settle_s: ticks before this time [s] are not scored in the error summary.
-        profile: record per-phase compute time of every tick (``phase_ns``).
+        profile: record per-phase wall time of every tick (``phase_ns``); ``"cpu"`` also the
+            thread CPU time of the compute phases (its clock calls inflate the wall phases).
         rig: an already opened rig (default: open the one the config names).
     """
 
@@ -176,7 +177,7 @@ class EdgeRuntime:
         use_correction: bool = True,
         telemetry_path: str | Path | None = None,
         settle_s: float = 0.0,
-        profile: bool = False,
+        profile: bool | str = False,
         rig: Rig | None = None,
     ) -> None:
         self.config, self.bundle, self.reference = config, bundle, reference
@@ -208,6 +209,7 @@ class EdgeRuntime:
             self.controller, config.safety, self.layout.status_fields, limits, config.period_s,
             device_errors=self.rig.errors,
         )  # fmt: skip
+        self.supervisor.bind(self.layout.status_view(self.frame))
         self.telemetry_path = (
             Path(str(telemetry_path).replace("{time}", time.strftime("%Y%m%dT%H%M%SZ", time.gmtime())))
             if telemetry_path
@@ -262,6 +264,8 @@ class EdgeRuntime:
             rig.close()
             raise
         self.telemetry = telemetry
+        if telemetry is not None:
+            telemetry.bind(self.layout.bytes_view(self.frame))
         realtime = RealtimeSettings(notes=["lockstep (simulated clock)"] if rig.lockstep else ["real-time disabled"])
         watchdog = None
         faults: list[str] = []
@@ -333,55 +337,70 @@ class EdgeRuntime:
     ) -> None:
         rig, supervisor, period, frame = self.rig, self.supervisor, self.config.period_s, self.frame
         read, step, write, prepare = rig.read, supervisor.step, rig.write, rig.prepare
-        record = telemetry.record if telemetry is not None else None
+        record = telemetry.record_bound if telemetry is not None else None
         phase, profile, settle = self.phase_ns, self.profile, self.settle_s
-        clock_ns = time.perf_counter_ns
+        clock_ns, cpu_ns = time.perf_counter_ns, time.thread_time_ns
+        timed_cpu = profile == "cpu"  # the CPU clock calls inflate the wall phases: a separate run
         hooks = self.on_tick
         tick = 0
         streak = 0
-        while not self.stop_requested.is_set():
-            if duration is not None and scheduler.index * period >= duration - 1e-9:
-                break
-            t, lateness = scheduler.wait()
-            for hook in hooks:
-                hook(t)
-            t0 = clock_ns()
-            frame.t, frame.lateness_us = t, lateness * 1e6
-            read(frame)
-            t1 = clock_ns()
-            if watchdog is not None and watchdog.fired_after_s is not None:
-                supervisor.trip(frame, Fault.WATCHDOG, f"loop stalled for {watchdog.fired_after_s * 1e3:.0f} ms")
-            elif telemetry is not None and telemetry.failure is not None:
-                supervisor.trip(frame, Fault.TELEMETRY, telemetry.failure)
-            else:
-                step(frame, period)
-            t2 = clock_ns()
-            write(frame)
-            if frame.state != SAFE_CODE:
-                prepare(frame)
-            t3 = clock_ns()
-            if frame.state == RUNNING_CODE and t >= settle:
-                y = frame.contraction_mm
-                if y == y:
-                    errors.add(frame.reference_mm - y)
-            if record is not None:
-                record(frame)
-            if supervisor._bus_errors != streak:
-                streak = supervisor._bus_errors
-                if streak:
-                    self._device_error_ticks += 1
+        count, sum_sq, sum_abs, max_abs = errors.count, errors.sum_sq, errors.sum_abs, errors.max_abs
+        stop = self.stop_requested
+        try:
+            while not stop.is_set():
+                if duration is not None and scheduler.index * period >= duration - 1e-9:
+                    break
+                t, lateness = scheduler.wait()
+                for hook in hooks:
+                    hook(t)
+                t0 = clock_ns()
+                frame.t, frame.lateness_us = t, lateness * 1e6
+                read(frame)
+                t1 = clock_ns()
+                c1 = cpu_ns() if timed_cpu else 0
+                if watchdog is not None and watchdog.fired_after_s is not None:
+                    supervisor.trip(frame, Fault.WATCHDOG, f"loop stalled for {watchdog.fired_after_s * 1e3:.0f} ms")
+                elif telemetry is not None and telemetry.failure is not None:
+                    supervisor.trip(frame, Fault.TELEMETRY, telemetry.failure)
+                else:
+                    step(frame, period)
+                t2 = clock_ns()
+                c2 = cpu_ns() if timed_cpu else 0
+                write(frame)
+                if frame.state != SAFE_CODE:
+                    prepare(frame)
+                t3 = clock_ns()
+                c3 = cpu_ns() if timed_cpu else 0
+                if frame.state == RUNNING_CODE and t >= settle:
+                    error = frame.reference_mm - frame.contraction_mm
+                    if error == error:  # a held tick has no reading
+                        count += 1
+                        sum_sq += error * error
+                        error = error if error >= 0.0 else -error
+                        sum_abs += error
+                        if error > max_abs:
+                            max_abs = error
+                if record is not None:
+                    record()
+                if supervisor._bus_errors != streak:
+                    streak = supervisor._bus_errors
+                    if streak:
+                        self._device_error_ticks += 1
+                        if telemetry is not None:
+                            telemetry.event(t, "device_error", supervisor._device_fault(frame) or "device error")
+                if profile and phase is not None and tick < len(phase):
+                    t4 = clock_ns()
+                    phase[tick] = (t1 - t0, t2 - t1, t3 - t2, t4 - t3, (c2 - c1) + (cpu_ns() - c3) if timed_cpu else 0)
+                tick += 1
+                if watchdog is not None:
+                    watchdog.heartbeat = time.monotonic()
+                if frame.state == SAFE_CODE:
+                    reason = supervisor.fault or "safe state"
+                    faults.append(reason)
                     if telemetry is not None:
-                        telemetry.event(t, "device_error", supervisor._device_fault(frame) or "device error")
-            if profile and phase is not None and tick < len(phase):
-                phase[tick] = (t1 - t0, t2 - t1, t3 - t2, clock_ns() - t3)
-            tick += 1
-            if watchdog is not None:
-                watchdog.heartbeat = time.monotonic()
-            if frame.state == SAFE_CODE:
-                reason = supervisor.fault or "safe state"
-                faults.append(reason)
-                if telemetry is not None:
-                    telemetry.event(t, "fault", reason, code=supervisor.fault_kind.value if supervisor.fault_kind else 0)
-                break
+                        telemetry.event(t, "fault", reason, code=supervisor.fault_kind.value if supervisor.fault_kind else 0)
+                    break
+        finally:
+            errors.count, errors.sum_sq, errors.sum_abs, errors.max_abs = count, sum_sq, sum_abs, max_abs
         if self.stop_requested.is_set() and telemetry is not None:
             telemetry.event(scheduler.index * period, "stop", "stop requested (signal); valve vented")

@@ -48,6 +48,7 @@ class State(Enum):
 
 STATE_CODES = {state: i for i, state in enumerate(State)}
 SAFE_CODE = STATE_CODES[State.SAFE]
+RUNNING_CODE = STATE_CODES[State.RUNNING]
 
 
 @dataclass(frozen=True)
@@ -143,8 +144,11 @@ class Supervisor:
     _overruns: int = 0
     _armed_at: float = math.nan
     _stuck: tuple[StuckDetector, StuckDetector] = field(init=False)
+    _status: Any = None
+    _status_zero: bytes = b""
 
     def __post_init__(self) -> None:
+        self._period_us = self.period_s * 1e6
         lim = self.limits
         self._stuck = (
             StuckDetector(lim.stuck_window_s, lim.stuck_command_span_bar),
@@ -187,36 +191,46 @@ class Supervisor:
                 return f"{device} write failed ({_errno_name(code)}): {self.device_errors.get(device, '')}".rstrip(": ")
         return None
 
+    def bind(self, status: Any) -> None:
+        """Check the device statuses of the frame through ``status``, a ctypes byte array over
+        all its ``rd_*`` / ``wr_*`` fields (one comparison per tick instead of one per field)."""
+        self._status, self._status_zero = status, bytes(len(status.raw))
+
     def step(self, frame: Any, dt: float) -> None:
         """Check ``frame`` (read this tick) and fill its command, or vent it (see module doc)."""
-        if self.state is State.CONFIGURED or self.state is State.SAFE:
+        state = self.state
+        if state is State.CONFIGURED or state is State.SAFE:
             self._vent(frame)
-            return
+            return None
         lim = self.limits
         if frame.estop == 1.0:
             return self.trip(frame, Fault.ESTOP, "e-stop pressed")
-        failed = self._device_fault(frame) if self.status_fields else None
+        status = self._status
+        failed = None
+        if status is None or status.raw != self._status_zero:
+            failed = self._device_fault(frame) if self.status_fields else None
         if failed is not None:
             self._bus_errors += 1
             if self._bus_errors >= lim.bus_error_streak:
                 return self.trip(frame, Fault.BUS, f"{self._bus_errors} consecutive ticks with a device error; {failed}")
-        else:
+        elif self._bus_errors:
             self._bus_errors = 0
-        if frame.lateness_us > self.period_s * 1e6:
+        if frame.lateness_us > self._period_us:
             self._overruns += 1
             if self._overruns >= lim.overrun_streak:
                 return self.trip(frame, Fault.OVERRUN, f"{self._overruns} consecutive deadline overruns")
-        else:
+        elif self._overruns:
             self._overruns = 0
         t, y, p = frame.t, frame.contraction_mm, frame.pressure_bar
+        controller = self.controller
         if failed is not None and y != y:  # the sensor's device failed this tick: hold
             frame.valve_enable = 1.0
-            frame.u_bar = 0.0 if self.state is State.ARMED else self.controller._last_bar
-            frame.state, frame.fault = STATE_CODES[self.state], 0
+            frame.u_bar = 0.0 if state is State.ARMED else controller._last_bar
+            frame.state, frame.fault = STATE_CODES[state], 0
             return None
-        if not math.isfinite(y):
-            return self.trip(frame, Fault.SENSOR_NONFINITE, "contraction reading is not finite")
         if not lim.contraction_min_mm <= y <= lim.contraction_max_mm:
+            if y != y or y in (math.inf, -math.inf):
+                return self.trip(frame, Fault.SENSOR_NONFINITE, "contraction reading is not finite")
             return self.trip(
                 frame,
                 Fault.SENSOR_RANGE,
@@ -225,39 +239,44 @@ class Supervisor:
             )
         if p > lim.pressure_max_bar:
             return self.trip(frame, Fault.OVERPRESSURE, f"overpressure {p:.2f} bar > {lim.pressure_max_bar} bar")
-        for name, low, high in self.channel_limits:
-            value = getattr(frame, name)
-            if value < low or value > high:
-                return self.trip(frame, Fault.SENSOR_RANGE, f"{name} {value:.3g} outside {low:g}..{high:g}")
+        if self.channel_limits:
+            for name, low, high in self.channel_limits:
+                value = getattr(frame, name)
+                if not low <= value <= high:
+                    return self.trip(frame, Fault.SENSOR_RANGE, f"{name} {value:.3g} outside {low:g}..{high:g}")
         if self._armed_at != self._armed_at:
             self._armed_at = t
-        last = self.controller._last_bar
-        for detector, value, label in ((self._stuck[0], y, "contraction"), (self._stuck[1], p, "pressure")):
-            frozen = detector.stuck_for(t, value, last) if value == value else 0.0
+        last = controller._last_bar
+        stuck_y, stuck_p = self._stuck
+        frozen = stuck_y.stuck_for(t, y, last)
+        if frozen:
+            return self._stuck_trip(frame, "contraction", y, frozen)
+        if p == p:
+            frozen = stuck_p.stuck_for(t, p, last)
             if frozen:
-                return self.trip(
-                    frame,
-                    Fault.SENSOR_STUCK,
-                    f"{label} sensor stuck at {value:.3f} for {frozen:.2f} s while the command swept "
-                    f"> {lim.stuck_command_span_bar} bar",
-                )
-        self.controller.fill(frame, dt)
-        if not math.isfinite(frame.u_ff_bar + frame.u_nn_bar):
+                return self._stuck_trip(frame, "pressure", p, frozen)
+        u = controller.fill_from(frame, dt, t, y, p)
+        bias = controller.bias_bar_
+        if bias - bias != 0.0:  # inf or nan
             return self.trip(
-                frame,
-                Fault.MODEL_OUTPUT,
-                f"model output not finite (feedforward {frame.u_ff_bar}, correction {frame.u_nn_bar})",
+                frame, Fault.MODEL_OUTPUT, f"model output not finite (feedforward {frame.u_ff_bar}, correction {frame.u_nn_bar})"
             )
-        if not math.isfinite(frame.u_bar):
+        if u - u != 0.0:
             return self.trip(frame, Fault.MODEL_OUTPUT, "control output is not finite")
-        if t - self._armed_at >= lim.tracking_grace_s and abs(frame.reference_mm - y) > lim.tracking_error_max_mm:
-            return self.trip(
-                frame, Fault.TRACKING, f"tracking error {abs(frame.reference_mm - y):.1f} mm > {lim.tracking_error_max_mm} mm"
-            )
+        error = controller.reference_mm_ - y
+        if (error > lim.tracking_error_max_mm or -error > lim.tracking_error_max_mm) and t - self._armed_at >= lim.tracking_grace_s:
+            return self.trip(frame, Fault.TRACKING, f"tracking error {abs(error):.1f} mm > {lim.tracking_error_max_mm} mm")
         self.state = State.RUNNING
-        frame.valve_enable = 1.0
-        frame.state, frame.fault = STATE_CODES[State.RUNNING], 0
+        frame.valve_enable, frame.state, frame.fault = 1.0, RUNNING_CODE, 0
         return None
+
+    def _stuck_trip(self, frame: Any, label: str, value: float, frozen: float) -> None:
+        self.trip(
+            frame,
+            Fault.SENSOR_STUCK,
+            f"{label} sensor stuck at {value:.3f} for {frozen:.2f} s while the command swept "
+            f"> {self.limits.stuck_command_span_bar} bar",
+        )
 
     def tick(self, t: float, dt: float, readings: Readings | None, health: Health | None = None) -> Outcome:
         """:meth:`step` on plain values (no frame); ``readings`` is None when the sensors could

@@ -81,6 +81,8 @@ class TelemetryWriter:
         self.dtype = dtype
         self._ring = np.zeros(ring_ticks, dtype=dtype)
         self._base = self._ring.ctypes.data
+        self._ring_bytes = memoryview(self._ring.view(np.uint8))
+        self._source: memoryview | None = None
         self._row_bytes = dtype.itemsize
         self._size = ring_ticks
         self._head = 0  # rows the tick has written (monotonic)
@@ -108,6 +110,18 @@ class TelemetryWriter:
     def record(self, frame: Any) -> None:
         """Copy one tick's frame (a ctypes row of :attr:`dtype`) into the ring. Never blocks."""
         ctypes.memmove(self._base + (self._head % self._size) * self._row_bytes, ctypes.addressof(frame), self._row_bytes)
+        self._head += 1
+
+    def bind(self, frame_bytes: memoryview) -> None:
+        """The frame :meth:`record_bound` copies (its bytes, ``FrameLayout.bytes_view``)."""
+        if len(frame_bytes) != self._row_bytes:
+            raise ValueError(f"frame of {len(frame_bytes)} bytes, rows of {self._row_bytes}")
+        self._source = frame_bytes
+
+    def record_bound(self) -> None:
+        """Copy the bound frame into the ring (a slice copy: ~0.3 us). Never blocks."""
+        start = (self._head % self._size) * self._row_bytes
+        self._ring_bytes[start : start + self._row_bytes] = self._source
         self._head += 1
 
     def record_array(self, row: np.ndarray) -> None:
