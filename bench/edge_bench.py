@@ -139,7 +139,8 @@ from tests.edge_helpers import rig_config
 out = []
 for _ in range(int(sys.argv[4])):
     with tempfile.TemporaryDirectory() as tmp:
-        edge = EdgeRuntime(rig_config(), load_bundle(sys.argv[2]), parse_reference("sine:amplitude=30,frequency=0.2,offset=40"),
+        reference = parse_reference("sine:amplitude=30,frequency=0.2,offset=40")
+        edge = EdgeRuntime(rig_config(), load_bundle(sys.argv[2]), reference,
                            telemetry_path=Path(tmp) / "t.pmt", profile=True, use_correction=sys.argv[5] == "1")
         wall, cpu = time.perf_counter(), time.process_time()
         s = edge.run(float(sys.argv[3])).as_dict()

@@ -136,7 +136,10 @@ def telemetry(args: argparse.Namespace) -> int:
         plot(record, Path(args.plot))
     bundle = record.header.get("bundle")
     model = f", model {bundle.get('kind')} {str(bundle.get('id'))[:12]}" if isinstance(bundle, dict) else ""
-    print(f"{args.file}: {len(record.rows)} ticks at {record.header.get('rate_hz')} Hz, {len(record.events)} events{model}")
+    print(
+        f"{args.file}: {len(record.rows)} ticks at {record.header.get('rate_hz')} Hz, "
+        f"{len(record.events)} events{model}"
+    )
     for event in record.events:
         print(f"  t={float(event['t']):.3f} s {event['kind']}: {event['text']}")  # type: ignore[arg-type]
     if record.problems:

@@ -28,7 +28,12 @@ from hil.plant import PlantParams
 from hil.rig import DEFAULT_WIRING, HilRig, Sensor, Wiring
 
 OPTIONS = {"adc", "effect", "seed", "clock", "faults"}
-QUANTITIES = {"contraction": "contraction_mm", "pressure": "pressure_bar", "load": "load_kg", "temperature": "temperature_c"}
+QUANTITIES = {
+    "contraction": "contraction_mm",
+    "pressure": "pressure_bar",
+    "load": "load_kg",
+    "temperature": "temperature_c",
+}
 ADC_DRIVERS = {"ads1115": "ADS1115", "ads1015": "ADS1015"}
 
 
@@ -76,11 +81,13 @@ def _query(buses: list[BusSpec], source: str) -> tuple[dict[str, str], list[str]
                 query[key] = values[-1]
         extra = bus.options.get("faults", [])
         if not isinstance(extra, list) or not all(isinstance(f, str) for f in extra):
-            raise ConfigError(f"{source}: [buses.{bus.name}] faults must be a list of strings like \"estop@3.0\"")
+            raise ConfigError(f'{source}: [buses.{bus.name}] faults must be a list of strings like "estop@3.0"')
         faults += extra
         unknown = set(bus.options) - {"faults", "hz"}
         if unknown:
-            raise ConfigError(f"{source}: [buses.{bus.name}] unknown key(s) {sorted(unknown)} for sim://; known: faults, hz")
+            raise ConfigError(
+                f"{source}: [buses.{bus.name}] unknown key(s) {sorted(unknown)} for sim://; known: faults, hz"
+            )
     return query, faults
 
 
@@ -111,7 +118,9 @@ def open_sim(buses: list[BusSpec], config: RigConfig) -> SimRig:
         raise ConfigError(f"{source}: sim:// emulates one ADC and one DAC; the config has {len(adcs)} and {len(dacs)}")
     variant = ADC_DRIVERS[adcs[0].driver] if adcs else "ADS1115"
     if query.get("adc", variant) != variant:
-        raise ConfigError(f"{source}: sim:// emulates an {query['adc']} but the ADC's driver is {variant}; make them agree")
+        raise ConfigError(
+            f"{source}: sim:// emulates an {query['adc']} but the ADC's driver is {variant}; make them agree"
+        )
     effect = query.get("effect", "none")
     if effect not in EFFECTS:
         raise ConfigError(f"{source}: sim:// effect {effect!r} unknown; use one of {list(EFFECTS)}")
@@ -126,7 +135,14 @@ def open_sim(buses: list[BusSpec], config: RigConfig) -> SimRig:
     hz = next((b.options["hz"] for b in buses if "hz" in b.options), None)
     params, truth = apply_effect(effect, PlantParams(), np.random.default_rng(seed), 3600.0)
     clock = MonotonicClock() if clock_mode == "realtime" else None
-    rig = HilRig(params, clock=clock, seed=seed, adc_variant=variant, bus_hz=hz, wiring=_wiring(config, {d.name for d in devices}))  # type: ignore[arg-type]
+    rig = HilRig(
+        params,
+        clock=clock,
+        seed=seed,
+        adc_variant=variant,
+        bus_hz=float(hz) if isinstance(hz, int | float) else None,
+        wiring=_wiring(config, {d.name for d in devices}),
+    )
     adc_address = adcs[0].address if adcs and adcs[0].address is not None else 0x48
     dac_address = dacs[0].address if dacs and dacs[0].address is not None else 0x60
     rig.bus.devices.clear()

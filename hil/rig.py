@@ -62,7 +62,9 @@ class Wiring:
     sensors: dict[int, Sensor] = field(
         default_factory=lambda: {
             PRESSURE_CHANNEL: Sensor("pressure_bar", 2.5, 0.5),  # 0.5-4.5 V for 0-10 bar
-            DISPLACEMENT_CHANNEL: Sensor("contraction_mm", 160.0 / ADC_VDD, ADC_VDD * 10.0 / 160.0),  # 0-3.3 V: -10..150 mm
+            DISPLACEMENT_CHANNEL: Sensor(
+                "contraction_mm", 160.0 / ADC_VDD, ADC_VDD * 10.0 / 160.0
+            ),  # 0-3.3 V: -10..150 mm
         }
     )
     valve_bar_per_volt: float = 2.0  # proportional valve: 0-5 V -> 0-10 bar

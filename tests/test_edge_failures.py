@@ -28,7 +28,9 @@ def bundle(tmp_path_factory):
 def rig_with(tmp_path, faults: str, name: str = "rig.toml"):
     """The shipped HIL config with ``faults`` scheduled in its sim:// URL."""
     path = tmp_path / name
-    path.write_text(HIL_RIG.read_text().replace("sim://rig?clock=lockstep", f"sim://rig?clock=lockstep&faults={faults}"))
+    path.write_text(
+        HIL_RIG.read_text().replace("sim://rig?clock=lockstep", f"sim://rig?clock=lockstep&faults={faults}")
+    )
     return path
 
 
@@ -144,19 +146,27 @@ def test_a_bad_reference_file_is_refused(tmp_path, capsys, bundle, content, expe
 @pytest.mark.parametrize(
     ("find", "replace", "expected"),
     [
-        ("tracking_error_max_mm = 25.0", "tracking_error_max_mm = nan", "tracking_error_max_mm = nan is not a finite number"),
+        (
+            "tracking_error_max_mm = 25.0",
+            "tracking_error_max_mm = nan",
+            "tracking_error_max_mm = nan is not a finite number",
+        ),
         ("pressure_max_bar = 6.5", "pressure_max_bar = nan", "[safety] pressure_max_bar = nan is not a finite number"),
         ("rate_hz = 1000", "rate_hz = nan", "[loop] rate_hz = nan is not a finite number"),
         ("ring_ticks = 65536", "ring_ticks = 1e10", "[telemetry] ring_ticks = 10000000000.0 is not an integer"),
         ("ring_ticks = 65536", "ring_ticks = 10000000000", "[telemetry] ring_ticks = 10000000000 must be in 1024.."),
     ],
 )
-def test_a_config_that_would_switch_a_trip_off_or_exhaust_memory_is_refused(tmp_path, capsys, bundle, find, replace, expected):
+def test_a_config_that_would_switch_a_trip_off_or_exhaust_memory_is_refused(
+    tmp_path, capsys, bundle, find, replace, expected
+):
     config = tmp_path / "rig.toml"
     text = HIL_RIG.read_text()
     assert find in text
     config.write_text(text.replace(find, replace, 1))
-    one_line_refusal(capsys, ["edge", "run", "--config", str(config), "--bundle", str(bundle), "--duration", "1"], expected)
+    one_line_refusal(
+        capsys, ["edge", "run", "--config", str(config), "--bundle", str(bundle), "--duration", "1"], expected
+    )
 
 
 def test_a_second_run_to_the_same_telemetry_path_is_refused_and_the_first_kept(tmp_path, capsys, bundle):

@@ -63,11 +63,13 @@ def test_a_fault_from_the_sim_url_ends_safe_in_three_ticks(tmp_path, capsys, bun
 
 
 def test_faults_from_the_config_table_and_a_bad_one_is_one_line(tmp_path, capsys, bundle):
-    text = HIL_RIG.read_text().replace('hz = 1_000_000', 'hz = 1_000_000\nfaults = ["estop@0.5"]', 1)
+    text = HIL_RIG.read_text().replace("hz = 1_000_000", 'hz = 1_000_000\nfaults = ["estop@0.5"]', 1)
     code, summary, record = run(tmp_path, capsys, bundle, text)
     assert code == 1 and summary["faults"] == ["e-stop pressed"] and summary["ticks"] < 510
     bad = HIL_RIG.read_text().replace("sim://rig?clock=lockstep", "sim://rig?clock=lockstep&faults=meteor@1")
     (tmp_path / "bad.toml").write_text(bad)
-    assert main(["edge", "run", "--config", str(tmp_path / "bad.toml"), "--bundle", str(bundle), "--duration", "1"]) == 2
+    assert (
+        main(["edge", "run", "--config", str(tmp_path / "bad.toml"), "--bundle", str(bundle), "--duration", "1"]) == 2
+    )
     err = capsys.readouterr().err.strip()
     assert "HIL fault 'meteor@1' unknown; write KIND@SECONDS" in err and err.count("\n") == 0

@@ -184,7 +184,9 @@ def test_a_dead_daq_ends_the_run_in_the_safe_state(bundle, hil_server, tmp_path)
     summary = edge.run(5.0).as_dict()
     record = read_telemetry(tmp_path / "t.pmt")
     t, fault = record.column("t"), record.column("fault")
-    assert set(fault[fault > 0]) == {Fault.BUS.value} and "consecutive ticks with a device error" in summary["faults"][0]
+    assert (
+        set(fault[fault > 0]) == {Fault.BUS.value} and "consecutive ticks with a device error" in summary["faults"][0]
+    )
     assert t[-1] < 2.0 + 0.05  # the DAQ's output went stale, then 3 ticks of errors
 
 

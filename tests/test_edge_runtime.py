@@ -47,8 +47,25 @@ def test_telemetry_has_every_tick_the_frame_columns_and_an_end_event(bundle, tmp
     summary = runtime(bundle, telemetry_path=path).run(3.0).as_dict()
     record = read_telemetry(path)
     assert len(record.rows) == summary["ticks"] == 3000 and record.truncated_bytes == 0
-    for column in ("t", "reference_mm", "contraction_mm", "pressure_bar", "u_ff_bar", "u_nn_bar", "u_fb_bar", "u_bar",
-                   "estop", "valve_enable", "state", "fault", "lateness_us", "rd_adc", "wr_dac", "rd_lines", "wr_lines"):
+    for column in (
+        "t",
+        "reference_mm",
+        "contraction_mm",
+        "pressure_bar",
+        "u_ff_bar",
+        "u_nn_bar",
+        "u_fb_bar",
+        "u_bar",
+        "estop",
+        "valve_enable",
+        "state",
+        "fault",
+        "lateness_us",
+        "rd_adc",
+        "wr_dac",
+        "rd_lines",
+        "wr_lines",
+    ):
         assert column in record.columns, column
     t = record.column("t")
     assert t[0] == 0.0 and t[-1] == pytest.approx(2.999)

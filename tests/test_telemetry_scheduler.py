@@ -15,7 +15,6 @@ from edge.runtime.telemetry import TelemetryWriter, read_telemetry
 from hil.clock import SimClock
 from host.cli import main
 
-
 DTYPE = np.dtype([("t", "<f8"), ("reference_mm", "<f8"), ("contraction_mm", "<f8"), ("u_bar", "<f8"),
                   ("u_ff_bar", "<f8"), ("u_nn_bar", "<f8"), ("u_fb_bar", "<f8"), ("lateness_us", "<f8"),
                   ("state", "<i4"), ("fault", "<i4")])  # fmt: skip
@@ -88,7 +87,11 @@ def test_a_partial_last_row_is_ignored_and_reported(tmp_path):
     with (tmp_path / "t.pmt").open("ab") as handle:
         handle.write(b"\x00" * 20)  # power cut in the middle of a row
     record = read_telemetry(tmp_path / "t.pmt")
-    assert len(record.rows) == 10 and record.truncated_bytes == 20 and "20 bytes of a partial last row" in record.problems[0]
+    assert (
+        len(record.rows) == 10
+        and record.truncated_bytes == 20
+        and "20 bytes of a partial last row" in record.problems[0]
+    )
 
 
 def test_a_file_that_is_not_telemetry_is_refused(tmp_path):

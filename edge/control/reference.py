@@ -89,7 +89,9 @@ def from_csv(path: Path, spec: str) -> tuple[Callable[[float], float], float]:
             raise UnicodeDecodeError("utf-8", text, 0, 1, "NUL byte")
         rows = list(csv.DictReader(text.decode("utf-8").splitlines()))
     except (UnicodeDecodeError, csv.Error) as exc:
-        raise DataError(f"{path}: not a text CSV ({exc.reason if isinstance(exc, UnicodeDecodeError) else exc})") from exc
+        raise DataError(
+            f"{path}: not a text CSV ({exc.reason if isinstance(exc, UnicodeDecodeError) else exc})"
+        ) from exc
     if not rows or not {"t", "y_ref"} <= set(rows[0]):
         raise DataError(f"{path}: needs columns t and y_ref (found {sorted(rows[0]) if rows else 'no rows'})")
     if len(rows) < 2:

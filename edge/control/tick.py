@@ -138,7 +138,11 @@ class Controller:
         bias = self.bias_bar_ = feedforward + correction
         if not math.isfinite(bias):  # the supervisor trips on it; keep the PID state clean
             frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar, frame.u_bar = (
-                reference, feedforward, correction, 0.0, math.nan
+                reference,
+                feedforward,
+                correction,
+                0.0,
+                math.nan,
             )
             return math.nan
         total = self.pid.step(reference, y, dt, bias)
@@ -152,7 +156,11 @@ class Controller:
         command = min(max(total, lim.pressure_min_bar), lim.pressure_max_bar)
         self._last_bar = command
         frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar, frame.u_bar = (
-            reference, feedforward, correction, feedback, command
+            reference,
+            feedforward,
+            correction,
+            feedback,
+            command,
         )
         return command
 

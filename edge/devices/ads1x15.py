@@ -97,7 +97,7 @@ class ADS1x15:
     def read_volts(self, channel: int) -> float:
         """One single-shot conversion of ``channel`` against GND [V], with a deadline."""
         self.start_single(channel)
-        self._clock.sleep_until(self._started + self.conversion_time_s)
+        self._clock.sleep_until(self._clock.now() + self.conversion_time_s)
         return self.finish_volts()
 
     def start_single(self, channel: int) -> None:

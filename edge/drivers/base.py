@@ -19,6 +19,7 @@ from typing import Any, ClassVar, Protocol
 
 from edge.errors import ConfigError
 from edge.runtime.rigspec import BusSpec, ChannelSpec, DeviceSpec
+from edge.runtime.wire import WireTime
 
 ENTRY_POINT_GROUP = "pmactl.drivers"
 
@@ -47,10 +48,11 @@ class DriverClass(Protocol):
     output_kind: ClassVar[str | None]
     option_keys: ClassVar[frozenset[str]]
     bus_schemes: ClassVar[frozenset[str]]
+    bus_kind: ClassVar[str]  # the bus handle it needs: "i2c", "gpio" or "serial"
 
     def __call__(self, spec: DeviceSpec, channels: tuple[ChannelSpec, ...], bus: Any, clock: Any) -> Device: ...
 
-    def wire_time(self, spec: DeviceSpec, channels: tuple[ChannelSpec, ...], bus: BusSpec) -> tuple[float, str]: ...
+    def wire_time(self, spec: DeviceSpec, channels: tuple[ChannelSpec, ...], bus: BusSpec) -> WireTime: ...
 
     def check(self, spec: DeviceSpec, channels: tuple[ChannelSpec, ...], bus: BusSpec, source: str) -> None: ...
 
@@ -83,7 +85,12 @@ def option(spec: DeviceSpec, key: str, default: Any, kind: type, source: str) ->
     value = spec.options.get(key, default)
     ok = isinstance(value, kind) and not (kind is not bool and isinstance(value, bool))
     if kind is float:
-        ok = isinstance(value, int | float) and not isinstance(value, bool) and value == value and abs(value) != float("inf")
+        ok = (
+            isinstance(value, int | float)
+            and not isinstance(value, bool)
+            and value == value
+            and abs(value) != float("inf")
+        )
     if not ok:
         raise ConfigError(f"{source}: [devices.{spec.name}] {key} = {value!r} must be {kind.__name__}")
-    return float(value) if kind is float else value
+    return float(value) if kind is float else value  # type: ignore[arg-type]

@@ -48,7 +48,9 @@ class ADS1x15Device:
             raise ConfigError(f"{source}: [devices.{spec.name}] {cls.variant} has no {rate} SPS; use one of {rates}")
         fsr = option(spec, "full_scale_v", 4.096, float, source)
         if fsr not in FULL_SCALE_V:
-            raise ConfigError(f"{source}: [devices.{spec.name}] full_scale_v {fsr} is not one of {sorted(FULL_SCALE_V)}")
+            raise ConfigError(
+                f"{source}: [devices.{spec.name}] full_scale_v {fsr} is not one of {sorted(FULL_SCALE_V)}"
+            )
         option(spec, "pipeline", True, bool, source)
         inputs = [c.input for c in channels]
         if any(i is None or not 0 <= i <= 3 for i in inputs) or len(set(inputs)) != len(inputs):
@@ -144,8 +146,11 @@ class MCP4725Device:
 
     def __init__(self, spec: DeviceSpec, channels: tuple[ChannelSpec, ...], bus: I2CBus, clock: Clock) -> None:
         self.name = spec.name
-        self.dac = MCP4725(bus, address=spec.address if spec.address is not None else 0x60,
-                           vdd=float(spec.options.get("vdd_v", 5.0)))  # type: ignore[arg-type]
+        self.dac = MCP4725(
+            bus,
+            address=spec.address if spec.address is not None else 0x60,
+            vdd=float(spec.options.get("vdd_v", 5.0)),  # type: ignore[arg-type]
+        )
         (channel,) = channels
         self._field, self._bar_per_volt = channel.field, channel.scale
 

@@ -61,7 +61,7 @@ class GpiodLines:
             }
         )
         try:
-            self._request = gpiod.request_lines(chip_path, config=config, consumer="pmactl")
+            self._request = gpiod.request_lines(chip_path, config=config, consumer="pmactl")  # type: ignore[arg-type]
         except OSError as exc:
             raise BusError(exc.errno, f"cannot request GPIO lines on {chip_path}: {exc}") from exc
 

@@ -83,15 +83,18 @@ class PySerialLink:
                 if remaining <= 0:
                     raise BusError(
                         errno.ETIMEDOUT,
-                        f"serial port {self.port}: {len(view)} bytes not taken within {self.write_timeout_s * 1e3:g} ms",
+                        f"serial port {self.port}: {len(view)} bytes not taken "
+                        f"within {self.write_timeout_s * 1e3:g} ms",
                     )
                 if self._fd is not None:
                     select.select([], [self._fd], [], remaining)
         except (serial.SerialException, OSError) as exc:
             if isinstance(exc, BusError):
                 raise
-            raise BusError(exc.errno or errno.EIO if isinstance(exc, OSError) else errno.EIO,
-                           f"serial port {self.port}: write failed ({exc})") from exc
+            raise BusError(
+                exc.errno or errno.EIO if isinstance(exc, OSError) else errno.EIO,
+                f"serial port {self.port}: write failed ({exc})",
+            ) from exc
 
     def close(self) -> None:
         self._serial.close()

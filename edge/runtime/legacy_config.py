@@ -35,7 +35,11 @@ def _section(raw: dict[str, object], name: str, source: str) -> dict[str, object
     for key in table:
         if key not in LEGACY_SECTIONS[name]:
             close = difflib.get_close_matches(key, LEGACY_SECTIONS[name], n=1)
-            hint = f"; did you mean {close[0]!r}?" if close else f"; known keys: {', '.join(sorted(LEGACY_SECTIONS[name]))}"
+            hint = (
+                f"; did you mean {close[0]!r}?"
+                if close
+                else f"; known keys: {', '.join(sorted(LEGACY_SECTIONS[name]))}"
+            )
             raise ConfigError(f"{source}: [{name}] unknown key {key!r}{hint}")
     return dict(table)
 
@@ -47,11 +51,19 @@ def _sensor(table: object, name: str, device: str, source: str) -> dict[str, obj
     expected = {"channel", scale_key, zero_key}
     for key in table:
         if key not in expected:
-            raise ConfigError(f"{source}: [sensors.{name}] unknown key {key!r}; known keys: {', '.join(sorted(expected))}")
+            raise ConfigError(
+                f"{source}: [sensors.{name}] unknown key {key!r}; known keys: {', '.join(sorted(expected))}"
+            )
     missing = expected - set(table)
     if missing:
         raise ConfigError(f"{source}: [sensors.{name}] missing required key {sorted(missing)[0]!r}")
-    return {"device": device, "input": table["channel"], "unit": unit, "scale": table[scale_key], "zero": table[zero_key]}
+    return {
+        "device": device,
+        "input": table["channel"],
+        "unit": unit,
+        "scale": table[scale_key],
+        "zero": table[zero_key],
+    }
 
 
 def translate_legacy(raw: dict[str, object], source: str) -> dict[str, object]:
@@ -77,12 +89,13 @@ def translate_legacy(raw: dict[str, object], source: str) -> dict[str, object]:
             f"{source}: [rig] io = {io!r} is not a known backend; use i2c:///dev/i2c-N, serial:///dev/ttyXXX or sim://rig"
         )
     buses: dict[str, object] = {}
-    devices: dict[str, object] = {}
+    devices: dict[str, dict[str, object]] = {}
     channels: dict[str, object] = {}
     if scheme == "serial":
         buses["daq"] = {"url": io, **({"baud": serial["baud"]} if "baud" in serial else {})}
-        options = {k: serial[k] for k in ("sample_rate_hz", "timeout_s") if k in serial}
-        devices["daq"] = {"driver": "serial-daq", "bus": "daq", **options, "vdd_v": dac.get("vdd_v", 5.0)}
+        options: dict[str, object] = {k: v for k, v in serial.items() if k in ("sample_rate_hz", "timeout_s")}
+        devices["daq"] = {"driver": "serial-daq", "bus": "daq", "vdd_v": dac.get("vdd_v", 5.0)}
+        devices["daq"].update(options)
         sensor_device = valve_device = line_device = "daq"
     else:
         buses["i2c"] = {"url": io, "hz": rig.get("i2c_bus_hz", 400_000)}
@@ -94,11 +107,16 @@ def translate_legacy(raw: dict[str, object], source: str) -> dict[str, object]:
             "driver": chip.lower(),
             "bus": "i2c",
             "address": adc.get("address", 0x48),
-            **{k: adc[k] for k in ("data_rate_sps", "full_scale_v") if k in adc},
+            **{k: v for k, v in adc.items() if k in ("data_rate_sps", "full_scale_v")},
         }
         if dac.get("chip", "MCP4725") != "MCP4725":
             raise ConfigError(f"{source}: [dac] chip = {dac.get('chip')!r} unknown; use MCP4725")
-        devices["dac"] = {"driver": "mcp4725", "bus": "i2c", "address": dac.get("address", 0x60), "vdd_v": dac.get("vdd_v", 5.0)}
+        devices["dac"] = {
+            "driver": "mcp4725",
+            "bus": "i2c",
+            "address": dac.get("address", 0x60),
+            "vdd_v": dac.get("vdd_v", 5.0),
+        }
         devices["lines"] = {"driver": "gpio", "bus": "gpio"}
         sensor_device, valve_device, line_device = "adc", "dac", "lines"
     for name in ("contraction", "pressure"):

@@ -38,7 +38,10 @@ def export_mcap(record: Telemetry, path: Path) -> int:
         "type": "object",
         "properties": {c: {"type": ["number", "null"]} for c in columns},
     }
-    event_schema = {"type": "object", "properties": {"t": {"type": "number"}, "kind": {"type": "string"}, "text": {"type": "string"}}}
+    event_schema = {
+        "type": "object",
+        "properties": {"t": {"type": "number"}, "kind": {"type": "string"}, "text": {"type": "string"}},
+    }
     try:
         stream = path.open("wb")
     except OSError as exc:
@@ -62,7 +65,9 @@ def export_mcap(record: Telemetry, path: Path) -> int:
         for i, t in enumerate(times):
             stamp = start + int(round(float(t) * 1e9))
             message = {c: _number(float(values[c][i])) for c in columns}
-            writer.add_message(tick_id, log_time=stamp, data=json.dumps(message).encode(), publish_time=stamp, sequence=i)
+            writer.add_message(
+                tick_id, log_time=stamp, data=json.dumps(message).encode(), publish_time=stamp, sequence=i
+            )
             count += 1
         for i, event in enumerate(record.events):
             stamp = start + int(round(float(event.get("t", 0.0)) * 1e9))  # type: ignore[arg-type]

@@ -109,7 +109,9 @@ class RigSpec:
 
 def _table(raw: object, where: str, source: str) -> dict[str, object]:
     if not isinstance(raw, dict) or not raw:
-        raise ConfigError(f"{source}: [{where}] must be a table with at least one entry; see docs/examples/hil-rig.toml")
+        raise ConfigError(
+            f"{source}: [{where}] must be a table with at least one entry; see docs/examples/hil-rig.toml"
+        )
     return raw
 
 
@@ -199,7 +201,9 @@ def parse_rig(raw: dict[str, object], source: str, driver_kinds: dict[str, dict[
             raise ConfigError(f"{source}: [{where}] unit {unit!r}: the controller works in {expected_unit}")
         scale = _number(table, "scale", where, source, 1.0)
         if scale == 0 or (kind == ANALOG_OUT and scale < 0):
-            raise ConfigError(f"{source}: [{where}] scale = {scale} must map volts to a range (non-zero; positive for outputs)")
+            raise ConfigError(
+                f"{source}: [{where}] scale = {scale} must map volts to a range (non-zero; positive for outputs)"
+            )
         minimum = _number(table, "min", where, source, -1e300)
         maximum = _number(table, "max", where, source, 1e300)
         if not minimum < maximum:
@@ -225,7 +229,9 @@ def parse_rig(raw: dict[str, object], source: str, driver_kinds: dict[str, dict[
     names = {c.name for c in channels}
     missing = [n for n in REQUIRED_CHANNELS if n not in names]
     if missing:
-        raise ConfigError(f"{source}: [channels] {', '.join(missing)} missing; the loop needs {', '.join(REQUIRED_CHANNELS)}")
+        raise ConfigError(
+            f"{source}: [channels] {', '.join(missing)} missing; the loop needs {', '.join(REQUIRED_CHANNELS)}"
+        )
     fields = [c.field for c in channels]
     if len(set(fields)) != len(fields):
         raise ConfigError(f"{source}: [channels] two channels share a telemetry column: {sorted(fields)}")

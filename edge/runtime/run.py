@@ -234,7 +234,9 @@ class EdgeRuntime:
             "correction": self.controller.correction is not None,
             "states": [s.value for s in State],
             "faults": {f.value: f.name.lower() for f in Fault},
-            "channels": {c.field: {"device": c.device, "unit": c.unit, "scale": c.scale, "zero": c.zero} for c in spec.channels},
+            "channels": {
+                c.field: {"device": c.device, "unit": c.unit, "scale": c.scale, "zero": c.zero} for c in spec.channels
+            },
             "devices": {d.name: {"driver": d.driver, "bus": spec.bus(d.bus).url} for d in spec.devices},
             "started_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         }
@@ -398,7 +400,9 @@ class EdgeRuntime:
                     reason = supervisor.fault or "safe state"
                     faults.append(reason)
                     if telemetry is not None:
-                        telemetry.event(t, "fault", reason, code=supervisor.fault_kind.value if supervisor.fault_kind else 0)
+                        telemetry.event(
+                            t, "fault", reason, code=supervisor.fault_kind.value if supervisor.fault_kind else 0
+                        )
                     break
         finally:
             errors.count, errors.sum_sq, errors.sum_abs, errors.max_abs = count, sum_sq, sum_abs, max_abs

@@ -212,7 +212,9 @@ class Supervisor:
         if failed is not None:
             self._bus_errors += 1
             if self._bus_errors >= lim.bus_error_streak:
-                return self.trip(frame, Fault.BUS, f"{self._bus_errors} consecutive ticks with a device error; {failed}")
+                return self.trip(
+                    frame, Fault.BUS, f"{self._bus_errors} consecutive ticks with a device error; {failed}"
+                )
         elif self._bus_errors:
             self._bus_errors = 0
         if frame.lateness_us > self._period_us:
@@ -259,13 +261,19 @@ class Supervisor:
         bias = controller.bias_bar_
         if bias - bias != 0.0:  # inf or nan
             return self.trip(
-                frame, Fault.MODEL_OUTPUT, f"model output not finite (feedforward {frame.u_ff_bar}, correction {frame.u_nn_bar})"
+                frame,
+                Fault.MODEL_OUTPUT,
+                f"model output not finite (feedforward {frame.u_ff_bar}, correction {frame.u_nn_bar})",
             )
         if u - u != 0.0:
             return self.trip(frame, Fault.MODEL_OUTPUT, "control output is not finite")
         error = controller.reference_mm_ - y
-        if (error > lim.tracking_error_max_mm or -error > lim.tracking_error_max_mm) and t - self._armed_at >= lim.tracking_grace_s:
-            return self.trip(frame, Fault.TRACKING, f"tracking error {abs(error):.1f} mm > {lim.tracking_error_max_mm} mm")
+        if (
+            error > lim.tracking_error_max_mm or -error > lim.tracking_error_max_mm
+        ) and t - self._armed_at >= lim.tracking_grace_s:
+            return self.trip(
+                frame, Fault.TRACKING, f"tracking error {abs(error):.1f} mm > {lim.tracking_error_max_mm} mm"
+            )
         self.state = State.RUNNING
         frame.valve_enable, frame.state, frame.fault = 1.0, RUNNING_CODE, 0
         return None
@@ -298,8 +306,14 @@ class Supervisor:
         command = None
         if valve and self.state is State.RUNNING and readings is not None:
             u = frame.u_bar
-            command = Command(u, frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar,
-                              u != frame.u_ff_bar + frame.u_nn_bar + frame.u_fb_bar)
+            command = Command(
+                u,
+                frame.reference_mm,
+                frame.u_ff_bar,
+                frame.u_nn_bar,
+                frame.u_fb_bar,
+                u != frame.u_ff_bar + frame.u_nn_bar + frame.u_fb_bar,
+            )
         return Outcome(frame.u_bar if valve else 0.0, valve, self.state, self.fault, command, self.fault_kind)
 
 

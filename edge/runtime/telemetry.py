@@ -81,7 +81,7 @@ class TelemetryWriter:
         self.dtype = dtype
         self._ring = np.zeros(ring_ticks, dtype=dtype)
         self._base = self._ring.ctypes.data
-        self._ring_bytes = memoryview(self._ring.view(np.uint8))
+        self._ring_bytes = self._ring.view(np.uint8).data
         self._source: memoryview | None = None
         self._row_bytes = dtype.itemsize
         self._size = ring_ticks
@@ -109,7 +109,9 @@ class TelemetryWriter:
     # tick side --------------------------------------------------------------------------------
     def record(self, frame: Any) -> None:
         """Copy one tick's frame (a ctypes row of :attr:`dtype`) into the ring. Never blocks."""
-        ctypes.memmove(self._base + (self._head % self._size) * self._row_bytes, ctypes.addressof(frame), self._row_bytes)
+        ctypes.memmove(
+            self._base + (self._head % self._size) * self._row_bytes, ctypes.addressof(frame), self._row_bytes
+        )
         self._head += 1
 
     def bind(self, frame_bytes: memoryview) -> None:
@@ -121,7 +123,7 @@ class TelemetryWriter:
     def record_bound(self) -> None:
         """Copy the bound frame into the ring (a slice copy: ~0.3 us). Never blocks."""
         start = (self._head % self._size) * self._row_bytes
-        self._ring_bytes[start : start + self._row_bytes] = self._source
+        self._ring_bytes[start : start + self._row_bytes] = self._source  # type: ignore[assignment]
         self._head += 1
 
     def record_array(self, row: np.ndarray) -> None:

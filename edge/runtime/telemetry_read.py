@@ -50,9 +50,13 @@ def _dtype(header: dict[str, object], source: Path, v1: bool) -> np.dtype:
         return np.dtype([(c, "<f8") for c in columns])
     descr = header.get("dtype")
     try:
-        dtype = np.dtype([tuple(item) for item in descr])  # type: ignore[union-attr]
+        if not isinstance(descr, list):
+            raise TypeError("not a list of (name, type) pairs")
+        dtype = np.dtype([tuple(item) for item in descr])
     except (TypeError, ValueError) as exc:
-        raise DataError(f"{source}: header dtype {descr!r} is not a row type ({exc}); the file cannot be decoded") from exc
+        raise DataError(
+            f"{source}: header dtype {descr!r} is not a row type ({exc}); the file cannot be decoded"
+        ) from exc
     if list(dtype.names or ()) != columns or dtype.itemsize == 0:
         raise DataError(f"{source}: header dtype does not match its columns; the file cannot be decoded")
     return dtype
