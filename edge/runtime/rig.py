@@ -20,7 +20,7 @@ from edge.errors import ConfigError
 from edge.hal.clock import Clock, MonotonicClock
 from edge.runtime.config import RigConfig
 from edge.runtime.frame import FrameLayout
-from edge.runtime.rigspec import ANALOG_IN, LINE_IN, BusSpec, RigSpec
+from edge.runtime.rigspec import ANALOG_IN, LINE_IN, LINE_OUT, BusSpec, RigSpec
 
 BACKENDS_GROUP = "pmactl.backends"
 
@@ -96,7 +96,7 @@ class Rig:
 
     def vent(self) -> None:
         """Best effort safe state: line outputs (valve enable) first, then the DACs."""
-        for device in sorted(self.devices, key=lambda d: type(d).__name__ != "GpioDevice"):
+        for device in sorted(self.devices, key=lambda d: getattr(type(d), "output_kind", None) != LINE_OUT):
             device.vent()
 
     def close(self) -> None:
