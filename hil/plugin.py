@@ -91,6 +91,11 @@ def _query(buses: list[BusSpec], source: str) -> tuple[dict[str, str], list[str]
     return query, faults
 
 
+def wiring_from_config(config: RigConfig, devices: set[str]) -> Wiring:
+    """The emulated sensors and valve wired as ``config``'s channels on ``devices`` say."""
+    return _wiring(config, devices)
+
+
 def _wiring(config: RigConfig, sim_devices: set[str]) -> Wiring:
     sensors = {}
     for channel in config.rig.channels:

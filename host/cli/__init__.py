@@ -32,7 +32,7 @@ def _lazy(module: str, function: str = "run") -> Callable[[argparse.Namespace], 
 def _hil_serve(args: argparse.Namespace) -> int:
     from hil.serve import serve
 
-    return serve(args.effect, args.seed, args.rate, args.duration)
+    return serve(args.effect, args.seed, args.rate, args.duration, args.config)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -114,6 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
     srv.add_argument("--seed", type=int, default=0)
     srv.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sample frames per second")
     srv.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: until SIGTERM)")
+    srv.add_argument("--config", metavar="RIG.toml", help="wire sensors and valve as this rig config says")
     srv.set_defaults(run=_hil_serve)
     return parser
 
