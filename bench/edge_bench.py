@@ -1,11 +1,16 @@
 """Benchmark of the edge loop: per-tick compute inside the running loop, real-time lateness.
 
-Usage: python bench/edge_bench.py [--seconds 60] [--skip-realtime]
+Usage: python bench/edge_bench.py [--seconds 60] [--skip-realtime] [--before DIR] [--repeats 3]
 
 1. Per-tick breakdown (median / p99 us) of a 20 s lockstep run on the HIL at 1 kHz with a
    Preisach lookup-table inverse and a 2-5-10-1 ONNX correction (seed 000's BP net shape):
    read, inverse, NN, PID, limits + safety, write, log. read and write run the emulated chips
    and integrate the plant inside the bus transfers, so they overstate a real bus's CPU cost.
+   Then the whole-tick compute (supervisor + control law + telemetry row) of untimed runs, with
+   and without the ONNX net: wall time per tick, thread CPU time per tick (a separate run: the
+   CPU clock calls cost time themselves), and the same runs of the pre-v2 runtime when its
+   source is given (``--before DIR``, e.g. ``git archive 4df3193 | tar -x -C DIR``) so the
+   ratio comes from one process on one loaded machine.
 2. Lateness of a real-time 1 kHz run (``--seconds``) over the serial DAQ protocol on a pty, the
    HIL in its own process (``pmactl hil serve``): median, p99, p99.9, max, overruns per 1e4
    ticks, with and without SCHED_FIFO.
@@ -65,7 +70,7 @@ def make_bundle(root: Path) -> Path:
     return bundle
 
 
-def profiled_run(bundle: Path, seconds: float, timed: bool) -> tuple[EdgeRuntime, dict]:
+def profiled_run(bundle: Path, seconds: float, timed: bool, profile: bool | str = True, nn: bool = True):
     """A lockstep run with per-phase timing; ``timed`` also wraps inverse, NN and PID."""
     n = int(seconds * 1000)
     with tempfile.TemporaryDirectory() as tmp:
@@ -74,14 +79,17 @@ def profiled_run(bundle: Path, seconds: float, timed: bool) -> tuple[EdgeRuntime
             load_bundle(bundle),
             parse_reference("sine:amplitude=30,frequency=0.2,offset=40"),
             telemetry_path=Path(tmp) / "t.pmt",
-            profile=True,
+            profile=profile,
+            use_correction=nn,
         )
         if timed:
             controller = edge.controller
             controller.inverse = Timed(controller.inverse, n)
             controller.correction = Timed(controller.correction, n)
             controller.pid = Timed(controller.pid, n)
+        wall, cpu = time.perf_counter(), time.process_time()
         summary = edge.run(seconds).as_dict()
+        summary["run_wall_s"], summary["run_cpu_s"] = time.perf_counter() - wall, time.process_time() - cpu
     return edge, summary
 
 
@@ -97,17 +105,78 @@ def breakdown(bundle: Path, seconds: float = 20.0) -> None:
         "PID": pid,
         "limits + safety (+ timer cost)": phases[:, PHASES.index("control")] - inverse - nn - pid,
         "write (emulated chips + plant)": phases[:, PHASES.index("write")],
-        "log (telemetry row)": phases[:, PHASES.index("log")],
+        "log (telemetry row + error sums)": phases[:, PHASES.index("log")],
     }
-    print(f"\nPer-tick breakdown, lockstep HIL, 1 kHz, {summary['ticks']} ticks (us)")
+    print(f"\nPer-tick breakdown, lockstep HIL, 1 kHz, {summary['ticks']} ticks (us, wall)")
     print(f"{'phase':<34} {'median':>8} {'p99':>8}")
     for name, values in parts.items():
         print(f"{name:<34} {np.median(values):8.2f} {np.percentile(values, 99):8.2f}")
-    edge, summary = profiled_run(bundle, seconds, timed=False)  # the whole tick without the timers
-    phases = edge.phase_ns[: summary["ticks"]] / 1e3
-    compute = phases[:, PHASES.index("control")] + phases[:, PHASES.index("log")]
-    print(f"{'whole tick compute, untimed run':<34} {np.median(compute):8.2f} {np.percentile(compute, 99):8.2f}")
-    print(f"(safety + inverse + NN + PID + limits + log; tracking RMS {summary['rms_error']:.2f} mm, untrained net)")
+
+
+def whole_tick(bundle: Path, seconds: float, nn: bool, repeats: int) -> list[tuple[float, float, float, float, float]]:
+    """(wall median, wall p99, CPU median, CPU p99 [us], run CPU / wall) of each repeat."""
+    rows = []
+    for _ in range(repeats):
+        edge, summary = profiled_run(bundle, seconds, timed=False, profile=True, nn=nn)
+        phases = edge.phase_ns[: summary["ticks"]] / 1e3
+        wall = phases[:, PHASES.index("control")] + phases[:, PHASES.index("log")]
+        edge, cpu_summary = profiled_run(bundle, seconds, timed=False, profile="cpu", nn=nn)
+        cpu = edge.phase_ns[: cpu_summary["ticks"], PHASES.index("cpu")] / 1e3
+        share = summary["run_cpu_s"] / summary["run_wall_s"]
+        rows.append((np.median(wall), np.percentile(wall, 99), np.median(cpu), np.percentile(cpu, 99), share))
+    return rows
+
+
+BEFORE_SCRIPT = """
+import sys, tempfile, time, json
+from pathlib import Path
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+from edge.control.reference import parse_reference
+from edge.runtime.bundle import load_bundle
+from edge.runtime.run import PHASES, EdgeRuntime
+from tests.edge_helpers import rig_config
+out = []
+for _ in range(int(sys.argv[4])):
+    with tempfile.TemporaryDirectory() as tmp:
+        reference = parse_reference("sine:amplitude=30,frequency=0.2,offset=40")
+        edge = EdgeRuntime(rig_config(), load_bundle(sys.argv[2]), reference,
+                           telemetry_path=Path(tmp) / "t.pmt", profile=True, use_correction=sys.argv[5] == "1")
+        wall, cpu = time.perf_counter(), time.process_time()
+        s = edge.run(float(sys.argv[3])).as_dict()
+        share = (time.process_time() - cpu) / (time.perf_counter() - wall)
+    ph = edge.phase_ns[: s["ticks"]] / 1e3
+    c = ph[:, PHASES.index("control")] + ph[:, PHASES.index("log")]
+    out.append([float(np.median(c)), float(np.percentile(c, 99)), share])
+print(json.dumps(out))
+"""
+
+
+def before(root: Path, bundle: Path, seconds: float, nn: bool, repeats: int) -> list[list[float]]:
+    """The pre-v2 runtime's whole-tick compute, from its own source tree, in a subprocess."""
+    import json
+    import os
+
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    result = subprocess.run(
+        [sys.executable, "-c", BEFORE_SCRIPT, str(root), str(bundle), str(seconds), str(repeats), "1" if nn else "0"],
+        capture_output=True, text=True, env=env, cwd=str(root), check=True,
+    )  # fmt: skip
+    return json.loads(result.stdout.strip().splitlines()[-1])
+
+
+def compute_table(bundle: Path, seconds: float, repeats: int, before_root: Path | None) -> None:
+    print(f"\nWhole-tick compute (supervisor + control law + telemetry row), {seconds:g} s lockstep runs x {repeats}")
+    print("(us per tick; targets: median <= 8, p99 <= 20; run CPU/wall: share of the run the process had the CPU)")
+    print(f"{'runtime':<28} {'wall med':>8} {'wall p99':>8} {'CPU med':>8} {'CPU p99':>8} {'CPU/wall':>8}")
+    for nn in (False, True):
+        label = "v2" + (" + ONNX net" if nn else "")
+        for row in whole_tick(bundle, seconds, nn, repeats):
+            print(f"{label:<28} {row[0]:8.2f} {row[1]:8.2f} {row[2]:8.2f} {row[3]:8.2f} {row[4]:8.2f}")
+        if before_root is not None:
+            old = "before v2" + (" + ONNX net" if nn else "")
+            for med, p99, share in before(before_root, bundle, seconds, nn, repeats):
+                print(f"{old:<28} {med:8.2f} {p99:8.2f} {'':>8} {'':>8} {share:8.2f}")
 
 
 def realtime_run(bundle: Path, seconds: float, fifo: bool) -> dict:
@@ -140,10 +209,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0, help="length of each real-time run")
     parser.add_argument("--skip-realtime", action="store_true")
+    parser.add_argument("--before", type=Path, metavar="DIR", help="source tree of the pre-v2 runtime (commit 4df3193)")
+    parser.add_argument("--repeats", type=int, default=3, help="runs per whole-tick row (default 3)")
+    parser.add_argument("--compute-seconds", type=float, default=10.0, help="length of each whole-tick run")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         bundle = make_bundle(Path(tmp))
         breakdown(bundle)
+        compute_table(bundle, args.compute_seconds, args.repeats, args.before)
         if args.skip_realtime:
             return
         print(f"\nReal-time 1 kHz over the serial DAQ (pty, HIL in another process), {args.seconds:g} s each")

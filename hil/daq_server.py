@@ -75,7 +75,7 @@ class DaqServer:
         """Apply received commands, then send every sample that has come due."""
         self._receive()
         now = self.rig.clock.now()
-        if self.rig.gpio.get("valve_enable") and now - self._last_command > self.command_timeout_s:
+        if self.rig.gpio.level("valve_enable") and now - self._last_command > self.command_timeout_s:
             self.rig.sync()
             self.rig.gpio.set("valve_enable", False)
             self.command_timeouts += 1
@@ -116,8 +116,8 @@ class DaqServer:
 
     def _sample_frame(self, t: float) -> bytes:
         rig = self.rig
-        status = (STATUS_ESTOP if rig.gpio.get("estop") else 0) | (
-            STATUS_VALVE_ENABLED if rig.gpio.get("valve_enable") else 0
+        status = (STATUS_ESTOP if rig.gpio.level("estop") else 0) | (
+            STATUS_VALVE_ENABLED if rig.gpio.level("valve_enable") else 0
         )
         payload = SAMPLE_FORMAT.pack(
             int(round(t * 1e6)) & 0xFFFFFFFF,

@@ -1,12 +1,19 @@
 """The ``sim`` backend of the edge runtime (entry point ``pmactl.backends``).
 
-``sim://rig?adc=ADS1015&effect=none&seed=0&clock=lockstep`` builds a :class:`~hil.rig.HilRig`
-with its emulated chips on the config's I2C clock rate. ``clock=lockstep`` (default) runs on a
-simulated clock, ``clock=realtime`` on the wall clock.
+Every ``sim://`` bus of a rig config is one emulated rig (:class:`~hil.rig.HilRig`). Its chips
+sit at the addresses the config's devices name, its sensors are wired as the config's channel
+table says (``volts = value / scale + zero``, the inverse of the edge's calibration) and its
+valve takes the ``valve`` channel's bar per volt, so the calibration lives in one place.
+
+URL options (``sim://rig?effect=creep&seed=3&clock=realtime&faults=dac_nack@2.0,estop@3``):
+``effect`` (a plant effect of :mod:`hil.effects`), ``seed``, ``clock`` (``lockstep``, the
+default, or ``realtime``), ``faults`` (:mod:`hil.faults`), ``adc`` (checked against the ADC's
+driver). A bus table may also give ``faults = ["dac_nack@2.0", ...]``.
 """
 
 from __future__ import annotations
 
+from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
@@ -14,39 +21,139 @@ import numpy as np
 from edge.errors import ConfigError
 from edge.hal.clock import MonotonicClock
 from edge.runtime.config import RigConfig
+from edge.runtime.rigspec import ANALOG_IN, BusSpec
 from hil.effects import EFFECTS, apply_effect
+from hil.faults import FaultSchedule, parse_faults
 from hil.plant import PlantParams
-from hil.rig import HilRig
+from hil.rig import DEFAULT_WIRING, HilRig, Sensor, Wiring
 
-OPTIONS = {"adc", "effect", "seed", "clock"}
+OPTIONS = {"adc", "effect", "seed", "clock", "faults"}
+QUANTITIES = {
+    "contraction": "contraction_mm",
+    "pressure": "pressure_bar",
+    "load": "load_kg",
+    "temperature": "temperature_c",
+}
+ADC_DRIVERS = {"ads1115": "ADS1115", "ads1015": "ADS1015"}
+
+
+class _SimGpioChip:
+    """``request()`` on the emulated lines (the names are the rig's)."""
+
+    def __init__(self, rig: HilRig) -> None:
+        self._rig = rig
+
+    def request(self, outputs: dict[str, int], inputs: dict[str, int], active_low: frozenset[str]) -> Any:
+        unknown = (set(outputs) | set(inputs)) - {"valve_enable", "estop"}
+        if unknown:
+            raise ConfigError(f"sim:// has the GPIO lines valve_enable and estop, not {sorted(unknown)}")
+        return self._rig.gpio
 
 
 class SimRig:
-    """A HilRig exposed as the plug-in protocol of ``edge.runtime.backends``."""
+    """A HilRig exposed as the ``pmactl.backends`` plug-in protocol (``edge.runtime.rig``)."""
 
-    def __init__(self, rig: HilRig, lockstep: bool, truth: dict[str, object]) -> None:
-        self.rig, self.lockstep, self.truth = rig, lockstep, truth
+    def __init__(self, rig: HilRig, lockstep: bool, truth: dict[str, object], schedule: FaultSchedule | None) -> None:
+        self.rig, self.lockstep, self.truth, self.schedule = rig, lockstep, truth, schedule
         self.bus, self.gpio, self.clock = rig.bus, rig.gpio, rig.clock
 
+    def handle(self, bus: BusSpec, kind: str) -> Any:
+        if kind == "i2c":
+            return self.rig.bus
+        if kind == "gpio":
+            return _SimGpioChip(self.rig)
+        raise ConfigError(f"sim:// has no {kind} bus; serve the emulated DAQ with pmactl hil serve and use serial://")
 
-def open_sim(url: str, config: RigConfig) -> SimRig:
-    query = {k: v[-1] for k, v in parse_qs(urlsplit(url).query).items()}
-    unknown = set(query) - OPTIONS
-    if unknown:
-        raise ConfigError(f"{config.source}: sim:// option(s) {sorted(unknown)} unknown; use {sorted(OPTIONS)}")
-    adc = query.get("adc", config.adc.chip)
-    if adc != config.adc.chip:
+    def close(self) -> None:
+        """Nothing to release."""
+
+
+def _query(buses: list[BusSpec], source: str) -> tuple[dict[str, str], list[str]]:
+    query: dict[str, str] = {}
+    faults: list[str] = []
+    for bus in buses:
+        for key, values in parse_qs(urlsplit(bus.url).query).items():
+            if key not in OPTIONS:
+                raise ConfigError(f"{source}: sim:// option {key!r} unknown; use {sorted(OPTIONS)}")
+            if key == "faults":
+                faults += [f for v in values for f in v.split(",") if f]
+            else:
+                query[key] = values[-1]
+        extra = bus.options.get("faults", [])
+        if not isinstance(extra, list) or not all(isinstance(f, str) for f in extra):
+            raise ConfigError(f'{source}: [buses.{bus.name}] faults must be a list of strings like "estop@3.0"')
+        faults += extra
+        unknown = set(bus.options) - {"faults", "hz"}
+        if unknown:
+            raise ConfigError(
+                f"{source}: [buses.{bus.name}] unknown key(s) {sorted(unknown)} for sim://; known: faults, hz"
+            )
+    return query, faults
+
+
+def wiring_from_config(config: RigConfig, devices: set[str]) -> Wiring:
+    """The emulated sensors and valve wired as ``config``'s channels on ``devices`` say."""
+    return _wiring(config, devices)
+
+
+def _wiring(config: RigConfig, sim_devices: set[str]) -> Wiring:
+    sensors = {}
+    for channel in config.rig.channels:
+        if channel.kind != ANALOG_IN or channel.device not in sim_devices:
+            continue
+        quantity = QUANTITIES.get(channel.name)
+        if quantity is None:
+            raise ConfigError(
+                f"{config.source}: [channels.{channel.name}] sim:// emulates {', '.join(QUANTITIES)} sensors only"
+            )
+        sensors[int(channel.input or 0)] = Sensor(quantity, channel.scale, channel.zero)
+    valve = config.rig.channel("valve")
+    return Wiring(sensors or DEFAULT_WIRING.sensors, valve.scale if valve else DEFAULT_WIRING.valve_bar_per_volt)
+
+
+def open_sim(buses: list[BusSpec], config: RigConfig) -> SimRig:
+    """The emulated rig behind ``buses`` (every ``sim://`` bus of ``config``)."""
+    source = config.source
+    query, fault_items = _query(buses, source)
+    names = {b.name for b in buses}
+    devices = [d for d in config.rig.devices if d.bus in names]
+    adcs = [d for d in devices if d.driver in ADC_DRIVERS]
+    dacs = [d for d in devices if d.driver == "mcp4725"]
+    if len(adcs) > 1 or len(dacs) > 1:
+        raise ConfigError(f"{source}: sim:// emulates one ADC and one DAC; the config has {len(adcs)} and {len(dacs)}")
+    variant = ADC_DRIVERS[adcs[0].driver] if adcs else "ADS1115"
+    if query.get("adc", variant) != variant:
         raise ConfigError(
-            f"{config.source}: sim:// emulates an {adc} but [adc] chip is {config.adc.chip}; make them agree"
+            f"{source}: sim:// emulates an {query['adc']} but the ADC's driver is {variant}; make them agree"
         )
     effect = query.get("effect", "none")
     if effect not in EFFECTS:
-        raise ConfigError(f"{config.source}: sim:// effect {effect!r} unknown; use one of {list(EFFECTS)}")
+        raise ConfigError(f"{source}: sim:// effect {effect!r} unknown; use one of {list(EFFECTS)}")
     clock_mode = query.get("clock", "lockstep")
     if clock_mode not in ("lockstep", "realtime"):
-        raise ConfigError(f"{config.source}: sim:// clock={clock_mode!r}; use lockstep or realtime")
-    seed = int(query.get("seed", "0"))
+        raise ConfigError(f"{source}: sim:// clock={clock_mode!r}; use lockstep or realtime")
+    try:
+        seed = int(query.get("seed", "0"))
+    except ValueError as exc:
+        raise ConfigError(f"{source}: sim:// seed={query['seed']!r} is not an integer") from exc
+    faults = parse_faults(fault_items, source)
+    hz = next((b.options["hz"] for b in buses if "hz" in b.options), None)
     params, truth = apply_effect(effect, PlantParams(), np.random.default_rng(seed), 3600.0)
     clock = MonotonicClock() if clock_mode == "realtime" else None
-    rig = HilRig(params, clock=clock, seed=seed, adc_variant=adc, bus_hz=config.rig.i2c_bus_hz)
-    return SimRig(rig, clock_mode == "lockstep", truth)
+    rig = HilRig(
+        params,
+        clock=clock,
+        seed=seed,
+        adc_variant=variant,
+        bus_hz=float(hz) if isinstance(hz, int | float) else None,
+        wiring=_wiring(config, {d.name for d in devices}),
+    )
+    adc_address = adcs[0].address if adcs and adcs[0].address is not None else 0x48
+    dac_address = dacs[0].address if dacs and dacs[0].address is not None else 0x60
+    rig.bus.devices.clear()
+    rig.bus.attach(adc_address, rig.adc)
+    rig.bus.attach(dac_address, rig.dac)
+    schedule = FaultSchedule(rig, faults, adc_address, dac_address) if faults else None
+    if schedule is not None:
+        rig.gpio.before_access.append(lambda: schedule.apply_due(rig.clock.now()))
+    return SimRig(rig, clock_mode == "lockstep", truth, schedule)

@@ -19,6 +19,7 @@ wire faults (:class:`~hil.devices.bus.WireFaults`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -36,21 +37,55 @@ DAC_ADDRESS = 0x60
 PRESSURE_CHANNEL = 0
 DISPLACEMENT_CHANNEL = 1
 ADC_VDD = 3.3
+NOISE = {"pressure_bar": 0.004, "contraction_mm": 0.03, "load_kg": 0.01, "temperature_c": 0.05}
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """One emulated sensor on an ADC input: ``volts = quantity / scale + zero`` (the inverse of
+    the edge's channel calibration ``value = (volts - zero) * scale``)."""
+
+    quantity: str  # a field of hil.plant.Outputs
+    scale: float
+    zero: float
+
+    def volts(self, value: float) -> float:
+        return value / self.scale + self.zero
+
+
+@dataclass(frozen=True)
+class Wiring:
+    """Which sensor sits on which ADC input, and the valve's bar per volt of DAC command.
+    The plug-in builds it from the rig config's channel table; the defaults are
+    ``docs/examples/hil-rig.toml``'s."""
+
+    sensors: dict[int, Sensor] = field(
+        default_factory=lambda: {
+            PRESSURE_CHANNEL: Sensor("pressure_bar", 2.5, 0.5),  # 0.5-4.5 V for 0-10 bar
+            DISPLACEMENT_CHANNEL: Sensor(
+                "contraction_mm", 160.0 / ADC_VDD, ADC_VDD * 10.0 / 160.0
+            ),  # 0-3.3 V: -10..150 mm
+        }
+    )
+    valve_bar_per_volt: float = 2.0  # proportional valve: 0-5 V -> 0-10 bar
+
+
+DEFAULT_WIRING = Wiring()
 
 
 def pressure_volts(pressure_bar: float) -> float:
-    """Transducer: 0.5 V at 0 bar, 4.5 V at 10 bar."""
-    return 0.5 + 0.4 * pressure_bar
+    """Transducer of the default wiring: 0.5 V at 0 bar, 4.5 V at 10 bar."""
+    return DEFAULT_WIRING.sensors[PRESSURE_CHANNEL].volts(pressure_bar)
 
 
 def displacement_volts(contraction_mm: float) -> float:
-    """Potentiometer: 0 V at -10 mm, 3.3 V at 150 mm."""
-    return ADC_VDD * (contraction_mm + 10.0) / 160.0
+    """Potentiometer of the default wiring: 0 V at -10 mm, 3.3 V at 150 mm."""
+    return DEFAULT_WIRING.sensors[DISPLACEMENT_CHANNEL].volts(contraction_mm)
 
 
-def valve_command_bar(dac_volts: float) -> float:
-    """Proportional valve: 2 bar per volt of command."""
-    return 2.0 * dac_volts
+def valve_command_bar(dac_volts: float, bar_per_volt: float = DEFAULT_WIRING.valve_bar_per_volt) -> float:
+    """Proportional valve: ``bar_per_volt`` bar per volt of command."""
+    return bar_per_volt * dac_volts
 
 
 @dataclass
@@ -80,8 +115,11 @@ class HilRig:
         seed: int = 0,
         adc_variant: str = "ADS1115",
         bus_hz: float | None = None,
+        wiring: Wiring | None = None,
     ) -> None:
         self.params = params or PlantParams()
+        self.wiring = wiring or DEFAULT_WIRING
+        self.hooks: list[Callable[[float], None]] = []  # called with the time before each sync (fault schedules)
         self.clock = clock or SimClock()
         self._rng = np.random.default_rng(seed)
         self.state = initial_state(self.params)
@@ -101,14 +139,16 @@ class HilRig:
         """What the valve is asked for now [bar]."""
         if self.faults.valve_stuck_bar is not None:
             return self.faults.valve_stuck_bar
-        if not self.gpio.get("valve_enable"):
+        if not self.gpio.level("valve_enable"):
             return 0.0  # vented
-        return valve_command_bar(self.dac.output_volts)
+        return valve_command_bar(self.dac.output_volts, self.wiring.valve_bar_per_volt)
 
     def sync(self) -> None:
         """Integrate the plant up to the clock's now."""
         dt = self.params.dt_s
         now = self.clock.now()
+        for hook in self.hooks:
+            hook(now)
         command = self.command_bar
         while self._plant_time + dt <= now + 1e-12:
             self.state = update(self._plant_time, self.state, command, self.params)
@@ -132,12 +172,11 @@ class HilRig:
         return self._sensor_volts(channel)
 
     def _sensor_volts(self, channel: int) -> float:
-        out = self.outputs()
-        if channel == PRESSURE_CHANNEL:
-            return pressure_volts(out.pressure_bar + self._rng.normal(0.0, 0.004))
-        if channel == DISPLACEMENT_CHANNEL:
-            return displacement_volts(out.contraction_mm + self._rng.normal(0.0, 0.03))
-        return 0.0
+        sensor = self.wiring.sensors.get(channel)
+        if sensor is None:
+            return 0.0  # nothing wired: the input sits at ground
+        value = getattr(self.outputs(), sensor.quantity)
+        return sensor.volts(value + self._rng.normal(0.0, NOISE.get(sensor.quantity, 0.0)))
 
     # fault switches -------------------------------------------------------------------------
     def fail_sensor(self, channel: int, mode: str | None) -> None:

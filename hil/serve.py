@@ -1,6 +1,6 @@
 """Real-time mode: the emulated rig on the wall clock, serving the serial DAQ on a pty.
 
-Run as ``pmactl hil serve``; prints ``pty: /dev/pts/N`` (flushed) and serves until SIGTERM or
+Run as ``pmactl hil serve [--config RIG.toml]``; prints ``pty: /dev/pts/N`` (flushed) and serves until SIGTERM or
 SIGINT, then prints what it sent and exits 0.
 """
 
@@ -18,10 +18,25 @@ from hil.plant import PlantParams
 from hil.rig import HilRig
 
 
-def serve(effect: str = "none", seed: int = 0, rate_hz: float = 1000.0, duration_s: float | None = None) -> int:
+def serve(
+    effect: str = "none",
+    seed: int = 0,
+    rate_hz: float = 1000.0,
+    duration_s: float | None = None,
+    config_path: str | None = None,
+) -> int:
+    """``config_path``: wire the sensors and the valve as that rig config's serial DAQ channels
+    say (the calibration the edge will use), instead of the default wiring."""
+    wiring = None
+    if config_path is not None:
+        from edge.runtime.config import load_config
+        from hil.plugin import wiring_from_config
+
+        config = load_config(config_path)
+        wiring = wiring_from_config(config, {d.name for d in config.rig.devices if d.driver == "serial-daq"})
     params, _ = apply_effect(effect, PlantParams(), np.random.default_rng(seed), duration_s or 3600.0)
     clock = MonotonicClock()
-    rig = HilRig(params, clock=clock, seed=seed)
+    rig = HilRig(params, clock=clock, seed=seed, wiring=wiring)
     master, path = open_pty()
     server = DaqServer(rig, master, rate_hz)
     stop = False

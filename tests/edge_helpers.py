@@ -19,11 +19,22 @@ SEED_000_SINE = "sine:amplitude=30,frequency=0.2,offset=40"
 
 
 def rig_config(example: str = "hil-rig.toml", **sections: dict) -> RigConfig:
-    """``docs/examples/<example>`` with ``sections`` merged in (e.g. loop={"rate_hz": 200})."""
+    """``docs/examples/<example>`` with ``sections`` merged in (e.g. loop={"rate_hz": 200}).
+
+    ``rig={"io": URL}`` (the first config format) sets the URL of the example's first bus;
+    ``buses={"i2c": {...}}`` and the like merge one level deeper."""
     path = HIL_RIG.parent / example
     raw = tomllib.loads(path.read_text())
+    legacy = sections.pop("rig", None)
+    if legacy and "io" in legacy:
+        first = next(iter(raw["buses"]))
+        raw["buses"][first]["url"] = legacy["io"]
     for name, values in sections.items():
-        raw.setdefault(name, {}).update(values)
+        if name in ("buses", "devices", "channels"):
+            for key, table in values.items():
+                raw[name].setdefault(key, {}).update(table)
+        else:
+            raw.setdefault(name, {}).update(values)
     return config_from_dict(raw, str(path))
 
 

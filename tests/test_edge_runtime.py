@@ -7,7 +7,7 @@ import json
 import pytest
 
 from edge.errors import BundleError
-from edge.runtime.telemetry import COLUMNS, read_telemetry
+from edge.runtime.telemetry import read_telemetry
 from host.cli import main
 from tests.edge_helpers import HIL_RIG, SEED_000_SINE, fit_bundle, rig_config, runtime
 
@@ -42,18 +42,52 @@ def test_seed_002_amplitude_ramp_at_5_ms(bundle):
     assert with_ff["rms_error"] / peak_to_peak < 0.07
 
 
-def test_telemetry_has_every_tick_and_the_run_events(bundle, tmp_path):
+def test_telemetry_has_every_tick_the_frame_columns_and_an_end_event(bundle, tmp_path):
     path = tmp_path / "run.pmt"
     summary = runtime(bundle, telemetry_path=path).run(3.0).as_dict()
     record = read_telemetry(path)
-    assert record.rows.shape == (summary["ticks"], len(COLUMNS)) == (3000, len(COLUMNS))
-    assert record.truncated_bytes == 0
+    assert len(record.rows) == summary["ticks"] == 3000 and record.truncated_bytes == 0
+    for column in (
+        "t",
+        "reference_mm",
+        "contraction_mm",
+        "pressure_bar",
+        "u_ff_bar",
+        "u_nn_bar",
+        "u_fb_bar",
+        "u_bar",
+        "estop",
+        "valve_enable",
+        "state",
+        "fault",
+        "lateness_us",
+        "rd_adc",
+        "wr_dac",
+        "rd_lines",
+        "wr_lines",
+    ):
+        assert column in record.columns, column
     t = record.column("t")
     assert t[0] == 0.0 and t[-1] == pytest.approx(2.999)
     u = record.column("u_bar")
     ff, fb = record.column("u_ff_bar"), record.column("u_fb_bar")
     assert abs(u[-1] - (ff[-1] + fb[-1])) < 1e-9  # unsaturated: the command is the sum of its parts
-    assert [e["kind"] for e in record.events] == ["arm"]
+    assert not record.rows["wr_dac"].any() and not record.rows["rd_adc"].any()
+    assert [e["kind"] for e in record.events] == ["arm", "end"]
+    end = record.events[-1]["summary"]
+    assert end["ticks"] == 3000 and end["faults"] == [] and end["rms_error"] == pytest.approx(summary["rms_error"])
+
+
+def test_the_header_records_which_model_ran(bundle, tmp_path):
+    import hashlib
+
+    runtime(bundle, telemetry_path=tmp_path / "run.pmt").run(0.1)
+    header = read_telemetry(tmp_path / "run.pmt").header
+    manifest = (bundle / "manifest.json").read_bytes()
+    assert header["bundle"]["id"] == hashlib.sha256(manifest).hexdigest()
+    assert header["bundle"]["kind"] == "preisach" and header["bundle"]["units"] == {"input": "bar", "output": "mm"}
+    assert header["bundle"]["created_utc"] == json.loads(manifest)["created_utc"]
+    assert header["channels"]["contraction_mm"]["unit"] == "mm"
 
 
 def test_a_bundle_fitted_in_other_units_is_refused(tmp_path):
@@ -81,7 +115,8 @@ def test_pmactl_edge_run_refuses_bad_input_in_one_line(bundle, tmp_path, capsys)
     config.write_text(HIL_RIG.read_text().replace("rate_hz = 1000", "rate_hz = 5000"))
     assert main(["edge", "run", "--config", str(config), "--bundle", str(bundle), "--duration", "1"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.count("\n") == 0 and "fastest this rig can meet is 0.949 ms (1054 Hz)" in err
+    assert err.count("\n") == 0 and "fastest this rig can meet is 0.646 ms (1548 Hz)" in err
+    assert "adc (ADS1015 at 3300 SPS): 1 conversion wait(s)" in err
     assert main(["edge", "run", "--config", str(HIL_RIG), "--bundle", str(tmp_path), "--duration", "1"]) == 2
     assert "no manifest.json" in capsys.readouterr().err
     args = ["edge", "run", "--config", str(HIL_RIG), "--bundle", str(bundle), "--reference", "square:x=1"]
@@ -90,7 +125,7 @@ def test_pmactl_edge_run_refuses_bad_input_in_one_line(bundle, tmp_path, capsys)
     assert main(["edge", "run", "--config", str(HIL_RIG), "--bundle", str(bundle)]) == 2
     assert "endless reference on a lockstep rig never stops; give --duration" in capsys.readouterr().err
     assert main(["edge", "run", "--config", str(HIL_RIG), "--bundle", str(bundle), "--duration", "-1"]) == 2
-    assert "--duration -1 must be positive" in capsys.readouterr().err
+    assert "--duration -1 must be a finite number of seconds > 0" in capsys.readouterr().err
     (tmp_path / "a_file").write_text("")
     args = ["edge", "run", "--config", str(HIL_RIG), "--bundle", str(bundle), "--duration", "1"]
     assert main([*args, "--telemetry", str(tmp_path / "a_file" / "t.pmt")]) == 2

@@ -50,7 +50,9 @@ def test_each_fault_ends_in_the_safe_state_within_three_ticks(tmp_path, name):
     first_fault = t[fault > 0][0]
     assert FAULT_AT_S - 1e-9 <= first_fault < FAULT_AT_S + 3 * PERIOD_S, name
     assert set(fault[fault > 0]) == {kind.value} and record.column("u_bar")[-1] == 0.0
-    assert [e["kind"] for e in record.events][-1] == "fault" and summary["faults"] == [record.events[-1]["text"]]
+    kinds = [e["kind"] for e in record.events]
+    assert kinds[-2:] == ["fault", "end"] and summary["faults"] == [record.events[-2]["text"]]
+    assert record.events[-1]["summary"]["faults"] == summary["faults"]
     assert rig.dac.output_volts == 0.0 and not rig.gpio.get("valve_enable")  # vented
 
 

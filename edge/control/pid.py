@@ -35,6 +35,7 @@ class PID:
         self.integral = 0.0
         self._y_filtered: float | None = None
         self._derivative = 0.0
+        self._dt, self._alpha = math.nan, 0.0
 
     def reset(self, measurement: float, output: float = 0.0) -> None:
         """Bumpless start: the next output equals ``output`` if the error is zero."""
@@ -46,17 +47,17 @@ class PID:
         """Output for this tick; ``bias`` (e.g. feedforward) counts towards saturation."""
         g = self.gains
         error = setpoint - measurement
-        if self._y_filtered is None:
-            self.reset(measurement)
-        assert self._y_filtered is not None
-        alpha = dt / (g.tau_d_s + dt)
         previous = self._y_filtered
-        self._y_filtered = previous + alpha * (measurement - previous)
-        self._derivative = (self._y_filtered - previous) / dt if dt > 0 else 0.0
-        unclamped = g.kp * error + self.integral + g.ki * error * dt - g.kd * self._derivative + bias
-        saturated_high = unclamped > g.out_max and error > 0
-        saturated_low = unclamped < g.out_min and error < 0
-        if not (saturated_high or saturated_low):
-            self.integral += g.ki * error * dt
-        output = g.kp * error + self.integral - g.kd * self._derivative + bias
-        return min(max(output, g.out_min), g.out_max)
+        if previous is None:
+            self.reset(measurement)
+            previous = measurement
+        if dt != self._dt:  # the filter coefficient, once per tick length
+            self._dt, self._alpha = dt, dt / (g.tau_d_s + dt)
+        filtered = self._y_filtered = previous + self._alpha * (measurement - previous)
+        derivative = self._derivative = (filtered - previous) / dt if dt > 0 else 0.0
+        p_term, d_term, increment = g.kp * error, g.kd * derivative, g.ki * error * dt
+        unclamped = p_term + self.integral + increment - d_term + bias  # this order: the golden telemetry
+        if not ((unclamped > g.out_max and error > 0) or (unclamped < g.out_min and error < 0)):
+            self.integral += increment
+        output = p_term + self.integral - d_term + bias
+        return g.out_min if output < g.out_min else g.out_max if output > g.out_max else output

@@ -75,18 +75,36 @@ def ramp_sine(
 
 
 def from_csv(path: Path, spec: str) -> tuple[Callable[[float], float], float]:
+    """Columns ``t`` [s] and ``y_ref`` [mm], at least two rows, every value a finite number."""
     try:
-        with path.open(newline="") as handle:
-            rows = list(csv.DictReader(handle))
+        text = path.read_bytes()
     except FileNotFoundError as exc:
         raise DataError(f"--reference {spec!r}: no such file") from exc
+    except IsADirectoryError as exc:
+        raise DataError(f"--reference {spec!r}: is a directory; give a CSV file with columns t,y_ref") from exc
+    except OSError as exc:
+        raise DataError(f"--reference {spec!r}: cannot read ({exc.strerror})") from exc
+    try:
+        if b"\x00" in text:
+            raise UnicodeDecodeError("utf-8", text, 0, 1, "NUL byte")
+        rows = list(csv.DictReader(text.decode("utf-8").splitlines()))
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise DataError(
+            f"{path}: not a text CSV ({exc.reason if isinstance(exc, UnicodeDecodeError) else exc})"
+        ) from exc
     if not rows or not {"t", "y_ref"} <= set(rows[0]):
         raise DataError(f"{path}: needs columns t and y_ref (found {sorted(rows[0]) if rows else 'no rows'})")
-    try:
-        times = [float(r["t"]) for r in rows]
-        values = [float(r["y_ref"]) for r in rows]
-    except ValueError as exc:
-        raise DataError(f"{path}: non-numeric t or y_ref ({exc})") from exc
+    if len(rows) < 2:
+        raise DataError(f"{path}: one row is not a trajectory; give at least two rows of t,y_ref")
+    times, values = [], []
+    for number, row in enumerate(rows, start=2):
+        try:
+            times.append(float(row["t"]))
+            values.append(float(row["y_ref"]))
+        except (TypeError, ValueError) as exc:
+            raise DataError(
+                f"{path}: line {number} has t={row.get('t')!r}, y_ref={row.get('y_ref')!r}; both must be numbers"
+            ) from exc
     if any(not math.isfinite(v) for v in times + values) or any(b <= a for a, b in zip(times, times[1:])):
         raise DataError(f"{path}: t must increase strictly and every value must be finite")
 

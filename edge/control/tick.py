@@ -1,10 +1,12 @@
-"""The per-tick control law: ``Controller.tick(t, dt, readings) -> Command`` with no I/O.
+"""The per-tick control law, pure: it fills the command fields of the tick's frame from its
+time and readings, with no I/O and no clock.
 
 Structure (seed 000 Fig 12, seed 003 eq 8): the desired trajectory goes through the inverse
 hysteresis model (feedforward, a lookup table), an optional neural correction (ONNX, see
 :mod:`edge.control.neural`) is added, then PID feedback on the measured output, then limits:
-pressure range and slew rate. Time and readings come in as arguments, so tests
-run thousands of ticks without a clock.
+pressure range and slew rate. :meth:`Controller.fill` works on the frame
+(:mod:`edge.runtime.frame`); :meth:`Controller.tick` is the same law on plain values, for
+tests and tools that have no frame.
 """
 
 from __future__ import annotations
@@ -12,13 +14,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 from edge.control.pid import PID, PIDGains
 from edge.hysteresis.lut import CompiledModel
 
 
-@dataclass(slots=True)  # built every tick: slots, not frozen (a frozen init costs ~0.15 us per field)
+@dataclass(slots=True)
 class Readings:
     """Sensor values of one tick: contraction [mm], pressure [bar]."""
 
@@ -26,9 +28,9 @@ class Readings:
     pressure_bar: float = float("nan")
 
 
-@dataclass(slots=True)  # built every tick: slots, not frozen (a frozen init costs ~0.15 us per field)
+@dataclass(slots=True)
 class Command:
-    """What to send this tick, and why (for telemetry)."""
+    """What to send this tick, and why."""
 
     pressure_bar: float
     reference_mm: float
@@ -36,6 +38,22 @@ class Command:
     correction_bar: float
     feedback_bar: float
     saturated: bool
+
+
+class ScratchFrame:
+    """The fields of a frame the control law and the supervisor use, as a plain object (for
+    :meth:`Controller.tick` and :meth:`edge.runtime.safety.Supervisor.tick`)."""
+
+    __slots__ = (
+        "t", "lateness_us", "reference_mm", "u_ff_bar", "u_nn_bar", "u_fb_bar", "u_bar",
+        "contraction_mm", "pressure_bar", "estop", "valve_enable", "state", "fault",
+    )  # fmt: skip
+
+    def __init__(self, t: float = 0.0, contraction_mm: float = math.nan, pressure_bar: float = math.nan) -> None:
+        self.t, self.lateness_us = t, 0.0
+        self.reference_mm = self.u_ff_bar = self.u_nn_bar = self.u_fb_bar = self.u_bar = 0.0
+        self.contraction_mm, self.pressure_bar = contraction_mm, pressure_bar
+        self.estop, self.valve_enable, self.state, self.fault = 0.0, 0.0, 0, 0
 
 
 class Correction(Protocol):
@@ -85,8 +103,10 @@ class Controller:
                 gains.kp, gains.ki, gains.kd, gains.tau_d_s, self.limits.pressure_min_bar, self.limits.pressure_max_bar
             )
         )
-        self._last_bar: float | None = None
-        self._last_reference: float | None = None
+        self._last_bar = 0.0
+        self._last_reference = math.nan
+        self.reference_mm_ = math.nan  # of the latest tick
+        self.bias_bar_ = 0.0  # feedforward + correction of the latest tick
 
     def arm(self, readings: Readings, pressure_bar: float = 0.0) -> None:
         """Bumpless start from the present state (feedforward memory reset to the rest state)."""
@@ -96,30 +116,58 @@ class Controller:
             self.correction.reset()
         self.pid.reset(readings.contraction_mm, 0.0)
         self._last_bar = pressure_bar
-        self._last_reference = None
+        self._last_reference = math.nan
 
-    def tick(self, t: float, dt: float, readings: Readings) -> Command:
-        """The command for time ``t`` [s] after a tick of ``dt`` [s]; no I/O, no clock."""
+    def fill(self, frame: Any, dt: float) -> None:
+        """Set ``reference_mm``, ``u_ff_bar``, ``u_nn_bar``, ``u_fb_bar`` and ``u_bar`` of
+        ``frame`` from its ``t`` [s], ``contraction_mm`` and ``pressure_bar``; ``dt`` [s]."""
+        self.fill_from(frame, dt, frame.t, frame.contraction_mm, frame.pressure_bar)
+
+    def fill_from(self, frame: Any, dt: float, t: float, y: float, p: float) -> float:
+        """:meth:`fill` with the readings already at hand (the supervisor has them); returns
+        the command ``u_bar`` and keeps ``reference_mm_`` and ``bias_bar_`` (feedforward +
+        correction) as attributes, so no per-tick object is built."""
         reference = self.reference(t)
         feedforward = self.inverse.step(reference) if self.inverse is not None else 0.0
         correction = 0.0
         if self.correction is not None:
             last = self._last_reference
-            rate = (reference - last) / dt if last is not None and dt > 0 else 0.0
-            previous = self._last_bar if self._last_bar is not None else 0.0
-            values = (reference, rate, feedforward, readings.contraction_mm, readings.pressure_bar, previous)
-            correction = self.correction.step(values)
-        self._last_reference = reference
-        bias = feedforward + correction
+            rate = (reference - last) / dt if last == last and dt > 0 else 0.0
+            correction = self.correction.step((reference, rate, feedforward, y, p, self._last_bar))
+        self._last_reference = self.reference_mm_ = reference
+        bias = self.bias_bar_ = feedforward + correction
         if not math.isfinite(bias):  # the supervisor trips on it; keep the PID state clean
-            return Command(math.nan, reference, feedforward, correction, 0.0, False)
-        total = self.pid.step(reference, readings.contraction_mm, dt, bias=bias)
+            frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar, frame.u_bar = (
+                reference,
+                feedforward,
+                correction,
+                0.0,
+                math.nan,
+            )
+            return math.nan
+        total = self.pid.step(reference, y, dt, bias)
         feedback = total - bias
-        lim = self.limits
-        if self._last_bar is not None:
-            step = lim.slew_bar_per_s * dt
-            total = min(max(total, self._last_bar - step), self._last_bar + step)
+        lim, last_bar = self.limits, self._last_bar
+        step = lim.slew_bar_per_s * dt
+        if total > last_bar + step:
+            total = last_bar + step
+        elif total < last_bar - step:
+            total = last_bar - step
         command = min(max(total, lim.pressure_min_bar), lim.pressure_max_bar)
-        saturated = command != bias + feedback
         self._last_bar = command
-        return Command(command, reference, feedforward, correction, feedback, saturated)
+        frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar, frame.u_bar = (
+            reference,
+            feedforward,
+            correction,
+            feedback,
+            command,
+        )
+        return command
+
+    def tick(self, t: float, dt: float, readings: Readings) -> Command:
+        """The command for time ``t`` [s] after a tick of ``dt`` [s]; no I/O, no clock."""
+        frame = ScratchFrame(t, readings.contraction_mm, readings.pressure_bar)
+        self.fill(frame, dt)
+        u = frame.u_bar
+        saturated = u == u and u != frame.u_ff_bar + frame.u_nn_bar + frame.u_fb_bar
+        return Command(u, frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar, saturated)

@@ -57,6 +57,7 @@ class ADS1x15:
         self.data_rate_sps = data_rate_sps
         self.timeout_factor = timeout_factor
         self._reply = I2CMessage.read_bytes(2)
+        self._started: float | None = None
 
     @property
     def conversion_time_s(self) -> float:
@@ -95,10 +96,23 @@ class ADS1x15:
 
     def read_volts(self, channel: int) -> float:
         """One single-shot conversion of ``channel`` against GND [V], with a deadline."""
+        self.start_single(channel)
+        self._clock.sleep_until(self._clock.now() + self.conversion_time_s)
+        return self.finish_volts()
+
+    def start_single(self, channel: int) -> None:
+        """Start a single-shot conversion of ``channel``; :meth:`finish_volts` collects it."""
         self._write(CONFIG, self._config(channel, single_shot=True))
-        started = self._clock.now()
+        self._started = self._clock.now()
+
+    def finish_volts(self) -> float:
+        """The conversion :meth:`start_single` began [V]: no wait if it is done (pipelined
+        use), else poll the OS bit until ``timeout_factor`` periods after the start."""
+        started = self._started
+        if started is None:
+            raise RuntimeError("finish_volts() without start_single()")
         deadline = started + self.timeout_factor * self.conversion_time_s
-        self._clock.sleep_until(started + self.conversion_time_s)
+        self._started = None
         while not self._read(CONFIG) & 0x8000:
             now = self._clock.now()
             if now >= deadline:

@@ -6,6 +6,7 @@ is configuration. The Linux backend uses libgpiod v2 (``gpiod.request_lines``).
 
 from __future__ import annotations
 
+import errno
 from collections.abc import Mapping
 from typing import Protocol
 
@@ -60,15 +61,24 @@ class GpiodLines:
             }
         )
         try:
-            self._request = gpiod.request_lines(chip_path, config=config, consumer="pmactl")
+            self._request = gpiod.request_lines(chip_path, config=config, consumer="pmactl")  # type: ignore[arg-type]
         except OSError as exc:
             raise BusError(exc.errno, f"cannot request GPIO lines on {chip_path}: {exc}") from exc
 
     def get(self, name: str) -> bool:
-        return self._request.get_value(self._offsets[name]) == self._value.ACTIVE
+        try:
+            return self._request.get_value(self._offsets[name]) == self._value.ACTIVE
+        except OSError as exc:  # libgpiod reports a vanished chip or a released request as OSError
+            raise BusError(exc.errno or errno.EIO, f"GPIO line {name!r}: read failed ({exc})") from exc
 
     def set(self, name: str, value: bool) -> None:
-        self._request.set_value(self._offsets[name], self._value.ACTIVE if value else self._value.INACTIVE)
+        try:
+            self._request.set_value(self._offsets[name], self._value.ACTIVE if value else self._value.INACTIVE)
+        except OSError as exc:
+            raise BusError(exc.errno or errno.EIO, f"GPIO line {name!r}: write failed ({exc})") from exc
 
     def close(self) -> None:
-        self._request.release()
+        try:
+            self._request.release()
+        except OSError:  # already gone (chip removed): nothing left to release
+            pass

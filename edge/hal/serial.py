@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import errno
 import select
+import time
 from typing import Protocol
 
 from edge.errors import BusError
@@ -40,12 +41,16 @@ class PySerialLink:
         import serial
 
         try:
-            self._serial = serial.serial_for_url(port, baudrate=baud, timeout=0, write_timeout=write_timeout_s)
+            # non-blocking writes, timed here: pyserial's own write timeout selects for
+            # writability after a complete write and reports a timeout for data already sent
+            # when the process was preempted for longer than the timeout (a loaded machine)
+            self._serial = serial.serial_for_url(port, baudrate=baud, timeout=0, write_timeout=0)
         except (serial.SerialException, ValueError) as exc:
             raise BusError(
                 errno.ENODEV, f"cannot open serial port {port}: {exc}; check the path and permissions"
             ) from exc
         self.port = port
+        self.write_timeout_s = write_timeout_s
         try:
             self._fd: int | None = self._serial.fileno()
         except Exception:  # URL backends such as loop:// have no descriptor
@@ -67,10 +72,29 @@ class PySerialLink:
     def write(self, data: bytes) -> None:
         import serial
 
+        view = memoryview(data)
+        deadline = time.monotonic() + self.write_timeout_s
         try:
-            self._serial.write(data)
-        except (serial.SerialTimeoutException, OSError) as exc:
-            raise BusError(errno.EIO, f"serial port {self.port}: write failed ({exc})") from exc
+            while True:
+                view = view[self._serial.write(view) or 0 :]
+                if not view:
+                    return
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    raise BusError(
+                        errno.ETIMEDOUT,
+                        f"serial port {self.port}: {len(view)} bytes not taken "
+                        f"within {self.write_timeout_s * 1e3:g} ms",
+                    )
+                if self._fd is not None:
+                    select.select([], [self._fd], [], remaining)
+        except (serial.SerialException, OSError) as exc:
+            if isinstance(exc, BusError):
+                raise
+            raise BusError(
+                exc.errno or errno.EIO if isinstance(exc, OSError) else errno.EIO,
+                f"serial port {self.port}: write failed ({exc})",
+            ) from exc
 
     def close(self) -> None:
         self._serial.close()

@@ -1,14 +1,18 @@
 """The edge runtime: config + bundle + rig -> the fixed-rate loop, until the duration, a fault
 or a stop request.
 
-Per tick: wait for the deadline -> read the sensors -> supervisor (safety checks, then the pure
-control tick) -> write the valve -> one telemetry row. I/O and time live here only. A fault
-vents in the same tick and ends the run; every exit path vents the valve, closes the rig,
-drains telemetry and gives the scheduling policy back. A runtime runs once.
+Per tick, on one preallocated frame (:mod:`edge.runtime.frame`): wait for the deadline ->
+``rig.read(frame)`` (every device; failures as errno fields) -> ``supervisor.step(frame)``
+(one rule over every device status, the channel checks, then the pure control law fills the
+command) -> ``rig.write(frame)`` -> ``rig.prepare(frame)`` (start the next conversions) ->
+telemetry copies the frame. No per-tick objects; ``gc.freeze()`` after warm-up. A fault vents
+in the same tick and ends the run; every exit path vents the valve, closes the rig, logs an
+``end`` event with the summary, drains telemetry and gives the scheduling policy back.
 """
 
 from __future__ import annotations
 
+import gc
 import math
 import threading
 import time
@@ -21,17 +25,19 @@ import numpy as np
 from edge.control.pid import PIDGains
 from edge.control.reference import Reference
 from edge.control.tick import Controller, Limits, Readings
-from edge.errors import BusError, ConfigError
-from edge.runtime.backends import OpenedRig, open_rig
+from edge.errors import BusError, DataError
 from edge.runtime.bundle import Bundle
 from edge.runtime.config import RigConfig
-from edge.runtime.safety import Fault, Health, State, Supervisor
+from edge.runtime.frame import frame_layout
+from edge.runtime.rig import Rig, open_rig
+from edge.runtime.rigspec import ANALOG_IN
+from edge.runtime.safety import SAFE_CODE, STATE_CODES, Fault, State, Supervisor
 from edge.runtime.scheduler import RealtimeSettings, TickScheduler, apply_realtime
 from edge.runtime.telemetry import TelemetryWriter
 
 SPIN_S = 300e-6  # poll the clock for the last 300 us before a deadline (wall clock only)
-PHASES = ("read", "control", "write", "log")
-STATE_CODES = {state: i for i, state in enumerate(State)}
+PHASES = ("read", "control", "write", "log", "cpu")  # wall ns per phase; "cpu": thread CPU ns of control + log
+RUNNING_CODE = STATE_CODES[State.RUNNING]
 
 
 @dataclass
@@ -87,11 +93,11 @@ class RunSummary:
 class Watchdog:
     """Vents the valve from its own thread if the loop stops ticking for ``timeout_s``.
 
-    The loop may be stalled inside a bus transfer; ``vent`` drops the GPIO enable line first,
-    which does not share that bus.
+    The loop may be stalled inside a bus transfer; :meth:`Rig.vent` drops the GPIO enable line
+    first, which does not share that bus.
     """
 
-    def __init__(self, rig: OpenedRig, timeout_s: float) -> None:
+    def __init__(self, rig: Rig, timeout_s: float) -> None:
         self._rig, self.timeout_s = rig, timeout_s
         self.heartbeat = time.monotonic()
         self.fired_after_s: float | None = None
@@ -104,11 +110,40 @@ class Watchdog:
             stalled = time.monotonic() - self.heartbeat
             if stalled > self.timeout_s and self.fired_after_s is None:
                 self.fired_after_s = stalled
-                self._rig.io.vent()
+                self._rig.vent()
 
     def stop(self) -> None:
         self._stop.set()
         self._thread.join()
+
+
+def bundle_record(bundle: Bundle | None) -> dict[str, object] | None:
+    """Which model ran: the bundle's identity (sha256 of the manifest as ``id``, kind, units,
+    creation time, signer), its release path and whether it carries a correction."""
+    if bundle is None:
+        return None
+    identity = bundle.identity
+    return {
+        "path": str(bundle.path),
+        "id": identity["bundle_id"],
+        **identity,
+        "correction": bundle.correction_path is not None,
+    }
+
+
+def check_duration(duration_s: float | None, settle_s: float, reference: Reference) -> None:
+    """Refuse a run that would measure nothing: a non-finite or non-positive duration, or a
+    settle time that covers all of it."""
+    if duration_s is not None and not (math.isfinite(duration_s) and duration_s > 0):
+        raise DataError(f"--duration {duration_s:g} must be a finite number of seconds > 0")
+    if not (math.isfinite(settle_s) and settle_s >= 0):
+        raise DataError(f"--settle {settle_s:g} must be a finite number of seconds >= 0")
+    length = duration_s if duration_s is not None else reference.duration_s
+    if length is not None and settle_s >= length:
+        raise DataError(
+            f"--settle {settle_s:g} s is not shorter than the run ({length:g} s); nothing would be scored. "
+            "Lower --settle or run longer"
+        )
 
 
 class EdgeRuntime:
@@ -120,9 +155,11 @@ class EdgeRuntime:
         reference: desired contraction [mm] over time.
         feedforward: False runs PID alone (the comparison of seed 000 Table 5).
         use_correction: False ignores the bundle's ONNX correction.
-        telemetry_path: where to write telemetry (None: none).
+        telemetry_path: where to write telemetry (None: none); ``{time}`` in it becomes the
+            start time (UTC), so a service writes a new file per run.
         settle_s: ticks before this time [s] are not scored in the error summary.
-        profile: record per-phase compute time of every tick (``phase_ns``).
+        profile: record per-phase wall time of every tick (``phase_ns``); ``"cpu"`` also the
+            thread CPU time of the compute phases (its clock calls inflate the wall phases).
         rig: an already opened rig (default: open the one the config names).
     """
 
@@ -136,8 +173,8 @@ class EdgeRuntime:
         use_correction: bool = True,
         telemetry_path: str | Path | None = None,
         settle_s: float = 0.0,
-        profile: bool = False,
-        rig: OpenedRig | None = None,
+        profile: bool | str = False,
+        rig: Rig | None = None,
     ) -> None:
         self.config, self.bundle, self.reference = config, bundle, reference
         if bundle is not None:
@@ -156,82 +193,136 @@ class EdgeRuntime:
             Limits(c.pressure_min_bar, c.pressure_max_bar, c.slew_bar_per_s),
             correction,
         )
-        self.supervisor = Supervisor(self.controller, config.safety)
-        self.rig = rig or open_rig(config)
-        self.telemetry_path = telemetry_path
+        self.layout = frame_layout(config.rig)
+        self.frame = self.layout.new()
+        limits = tuple(
+            (ch.field, ch.minimum, ch.maximum)
+            for ch in config.rig.channels
+            if ch.kind == ANALOG_IN and (math.isfinite(ch.minimum) or math.isfinite(ch.maximum))
+        )
+        self.rig = rig or open_rig(config, self.layout)
+        self.supervisor = Supervisor(
+            self.controller, config.safety, self.layout.status_fields, limits, config.period_s,
+            device_errors=self.rig.errors,
+        )  # fmt: skip
+        self.supervisor.bind(self.layout.status_view(self.frame))
+        self.telemetry_path = (
+            Path(str(telemetry_path).replace("{time}", time.strftime("%Y%m%dT%H%M%SZ", time.gmtime())))
+            if telemetry_path
+            else None
+        )
         self.settle_s = settle_s
         self.profile = profile
         self.phase_ns: np.ndarray | None = None
         self.stop_requested = threading.Event()
+        self._device_error_ticks = 0  # ticks on which some device reported an error
+        self.telemetry: TelemetryWriter | None = None  # the open writer while running
         self.on_tick: list[Callable[[float], None]] = []  # run before each tick's read (tests inject faults)
 
     def _header(self) -> dict[str, object]:
+        spec = self.config.rig
         return {
             "rate_hz": self.config.loop.rate_hz,
             "config": self.config.source,
-            "bundle": str(self.bundle.path) if self.bundle else None,
+            "bundle": bundle_record(self.bundle),
             "reference": self.reference.spec,
             "feedforward": self.controller.inverse is not None,
             "correction": self.controller.correction is not None,
             "states": [s.value for s in State],
             "faults": {f.value: f.name.lower() for f in Fault},
+            "channels": {
+                c.field: {"device": c.device, "unit": c.unit, "scale": c.scale, "zero": c.zero} for c in spec.channels
+            },
+            "devices": {d.name: {"driver": d.driver, "bus": spec.bus(d.bus).url} for d in spec.devices},
             "started_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         }
 
     def run(self, duration_s: float | None = None) -> RunSummary:
         """Run until ``duration_s`` [s] (default: the reference's length, else until stopped)."""
+        check_duration(duration_s, self.settle_s, self.reference)
         duration = duration_s if duration_s is not None else self.reference.duration_s
         config, rig = self.config, self.rig
         if duration is None and rig.lockstep:
-            raise ConfigError(f"{config.source}: an endless reference on a lockstep rig never stops; give --duration")
+            rig.close()
+            raise DataError(f"{config.source}: an endless reference on a lockstep rig never stops; give --duration")
         period = config.period_s
-        telemetry = (
-            TelemetryWriter(
-                self.telemetry_path, self._header(), config.telemetry.ring_ticks, config.telemetry.flush_interval_s
+        try:
+            telemetry = (
+                TelemetryWriter(
+                    self.telemetry_path,
+                    self._header(),
+                    self.layout.dtype,
+                    config.telemetry.ring_ticks,
+                    config.telemetry.flush_interval_s,
+                )
+                if self.telemetry_path
+                else None
             )
-            if self.telemetry_path
-            else None
-        )
+        except BaseException:
+            rig.close()
+            raise
+        self.telemetry = telemetry
+        if telemetry is not None:
+            telemetry.bind(self.layout.bytes_view(self.frame))
         realtime = RealtimeSettings(notes=["lockstep (simulated clock)"] if rig.lockstep else ["real-time disabled"])
         watchdog = None
         faults: list[str] = []
         errors = ErrorStats()
         scheduler = TickScheduler(rig.clock, period, spin_s=0.0 if rig.lockstep else SPIN_S)
-        bus_errors = 0
+        frozen = False
         try:
             if config.loop.realtime and not rig.lockstep:
                 realtime = apply_realtime(config.loop.priority, config.loop.cpu)
-            try:
-                first = rig.io.read()
-            except BusError as exc:
-                raise BusError(exc.errno, f"cannot arm, the first sensor read failed: {exc}") from exc
-            self.supervisor.arm(Readings(first.contraction_mm, first.pressure_bar))
+            gc.collect()
+            gc.freeze()  # everything allocated so far is permanent: the loop allocates ~nothing
+            frozen = True
+            frame = self.frame
+            rig.read(frame)
+            failed = [dev for dev, rd, _ in self.layout.status_fields if getattr(frame, rd)]
+            if failed:
+                detail = "; ".join(f"{d}: {rig.errors.get(d, '')}" for d in failed)
+                raise BusError(5, f"cannot arm, the first read failed ({detail})")
+            self.supervisor.arm(Readings(frame.contraction_mm, frame.pressure_bar))
             if telemetry:
-                telemetry.event(0.0, "arm", f"armed at {first.contraction_mm:.2f} mm; {'; '.join(realtime.notes)}")
-            if not rig.lockstep:
-                watchdog = Watchdog(rig, config.loop.watchdog_s)
+                telemetry.event(0.0, "arm", f"armed at {frame.contraction_mm:.2f} mm; {'; '.join(realtime.notes)}")
             n_max = int(math.ceil(duration / period)) + 1 if duration is not None else 0
             if self.profile:
                 self.phase_ns = np.zeros((max(n_max, 1), len(PHASES)), dtype=np.int64)
+            if not rig.lockstep:
+                watchdog = Watchdog(rig, config.loop.watchdog_s)
+            rig.prepare(frame)
             scheduler.start()
-            bus_errors = self._loop(scheduler, duration, telemetry, watchdog, errors, faults)
+            self._loop(scheduler, duration, telemetry, watchdog, errors, faults)
         finally:
-            rig.io.close()  # vents first
+            rig.close()  # vents first
+            if frozen:
+                gc.unfreeze()
             if watchdog:
                 watchdog.stop()
-            if telemetry:
-                telemetry.close()
             realtime.restore()
-        extra = {
-            "bus_errors": bus_errors,
+            extra = self._extra(telemetry)
+            if telemetry:
+                if telemetry.failure is not None and telemetry.failure not in faults:
+                    faults.append(telemetry.failure)
+                summary = RunSummary(errors, scheduler.stats.summary(), faults, realtime.notes, extra)
+                telemetry.event(scheduler.index * period, "end", "end of run", summary=summary.as_dict())
+                telemetry.close()
+                if telemetry.failure is not None and telemetry.failure not in faults:
+                    faults.append(telemetry.failure)  # the last drain failed
+        extra = self._extra(telemetry)
+        return RunSummary(errors, scheduler.stats.summary(), faults, realtime.notes, extra)
+
+    def _extra(self, telemetry: TelemetryWriter | None) -> dict[str, object]:
+        return {
+            "bus_errors": self._device_error_ticks,
             "feedforward": self.controller.inverse is not None,
             "correction": self.controller.correction is not None,
             "reference": self.reference.spec,
-            "rate_hz": config.loop.rate_hz,
+            "rate_hz": self.config.loop.rate_hz,
             "telemetry": str(self.telemetry_path) if self.telemetry_path else None,
             "telemetry_dropped": telemetry.dropped if telemetry else 0,
+            "bundle": bundle_record(self.bundle),
         }
-        return RunSummary(errors, scheduler.stats.summary(), faults, realtime.notes, extra)
 
     def _loop(
         self,
@@ -241,82 +332,75 @@ class EdgeRuntime:
         watchdog: Watchdog | None,
         errors: ErrorStats,
         faults: list[str],
-    ) -> int:
-        io, supervisor, period = self.rig.io, self.supervisor, self.config.period_s
-        phase, profile = self.phase_ns, self.profile
-        clock_ns = time.perf_counter_ns
-        bus_errors = 0
+    ) -> None:
+        rig, supervisor, period, frame = self.rig, self.supervisor, self.config.period_s, self.frame
+        read, step, write, prepare = rig.read, supervisor.step, rig.write, rig.prepare
+        record = telemetry.record_bound if telemetry is not None else None
+        phase, profile, settle = self.phase_ns, self.profile, self.settle_s
+        clock_ns, cpu_ns = time.perf_counter_ns, time.thread_time_ns
+        timed_cpu = profile == "cpu"  # the CPU clock calls inflate the wall phases: a separate run
+        hooks = self.on_tick
         tick = 0
-        while not self.stop_requested.is_set():
-            if duration is not None and scheduler.index * period >= duration - 1e-9:
-                break
-            t, lateness = scheduler.wait()
-            for hook in self.on_tick:
-                hook(t)
-            t0 = clock_ns()
-            bus_error = False
-            try:
-                reading = io.read()
-                readings = Readings(reading.contraction_mm, reading.pressure_bar)
-                estop = reading.estop
-            except BusError as exc:
-                bus_error, readings, estop = True, None, False
-                bus_errors += 1
-                if telemetry:
-                    telemetry.event(t, "bus_error", str(exc))
-            t1 = clock_ns()
-            if watchdog is not None and watchdog.fired_after_s is not None:
-                outcome = supervisor.trip(Fault.WATCHDOG, f"loop stalled for {watchdog.fired_after_s * 1e3:.0f} ms")
-            else:
-                outcome = supervisor.tick(t, period, readings, Health(bus_error, lateness > period, estop))
-            t2 = clock_ns()
-            try:
-                io.write(outcome.pressure_bar, outcome.valve_enabled)
-            except BusError as exc:
-                bus_errors += 1
-                if telemetry:
-                    telemetry.event(t, "bus_error", str(exc))
-            t3 = clock_ns()
-            command = outcome.command
-            if command is not None and readings is not None and t >= self.settle_s:
-                errors.add(command.reference_mm - readings.contraction_mm)
-            if telemetry:
-                y = readings.contraction_mm if readings else math.nan
-                p = readings.pressure_bar if readings else math.nan
-                if command is not None:
-                    ref, ff, nn, fb = (
-                        command.reference_mm,
-                        command.feedforward_bar,
-                        command.correction_bar,
-                        command.feedback_bar,
-                    )
+        streak = 0
+        count, sum_sq, sum_abs, max_abs = errors.count, errors.sum_sq, errors.sum_abs, errors.max_abs
+        stop = self.stop_requested
+        try:
+            while not stop.is_set():
+                if duration is not None and scheduler.index * period >= duration - 1e-9:
+                    break
+                t, lateness = scheduler.wait()
+                for hook in hooks:
+                    hook(t)
+                t0 = clock_ns()
+                frame.t, frame.lateness_us = t, lateness * 1e6
+                read(frame)
+                t1 = clock_ns()
+                c1 = cpu_ns() if timed_cpu else 0
+                if watchdog is not None and watchdog.fired_after_s is not None:
+                    supervisor.trip(frame, Fault.WATCHDOG, f"loop stalled for {watchdog.fired_after_s * 1e3:.0f} ms")
+                elif telemetry is not None and telemetry.failure is not None:
+                    supervisor.trip(frame, Fault.TELEMETRY, telemetry.failure)
                 else:
-                    ref = ff = nn = fb = math.nan
-                telemetry.record(
-                    (
-                        t,
-                        ref,
-                        y,
-                        p,
-                        ff,
-                        nn,
-                        fb,
-                        outcome.pressure_bar if outcome.valve_enabled else 0.0,
-                        STATE_CODES[outcome.state],
-                        outcome.fault_kind.value if outcome.fault_kind else 0,
-                        lateness * 1e6,
-                    )
-                )
-            if profile and phase is not None and tick < len(phase):
-                phase[tick] = (t1 - t0, t2 - t1, t3 - t2, clock_ns() - t3)
-            tick += 1
-            if watchdog is not None:
-                watchdog.heartbeat = time.monotonic()
-            if outcome.state is State.SAFE:
-                faults.append(outcome.fault or "safe state")
-                if telemetry:
-                    telemetry.event(t, "fault", outcome.fault or "safe state")
-                break
-        if self.stop_requested.is_set() and telemetry:
+                    step(frame, period)
+                t2 = clock_ns()
+                c2 = cpu_ns() if timed_cpu else 0
+                write(frame)
+                if frame.state != SAFE_CODE:
+                    prepare(frame)
+                t3 = clock_ns()
+                c3 = cpu_ns() if timed_cpu else 0
+                if frame.state == RUNNING_CODE and t >= settle:
+                    error = frame.reference_mm - frame.contraction_mm
+                    if error == error:  # a held tick has no reading
+                        count += 1
+                        sum_sq += error * error
+                        error = error if error >= 0.0 else -error
+                        sum_abs += error
+                        if error > max_abs:
+                            max_abs = error
+                if record is not None:
+                    record()
+                if supervisor._bus_errors != streak:
+                    streak = supervisor._bus_errors
+                    if streak:
+                        self._device_error_ticks += 1
+                        if telemetry is not None:
+                            telemetry.event(t, "device_error", supervisor._device_fault(frame) or "device error")
+                if profile and phase is not None and tick < len(phase):
+                    t4 = clock_ns()
+                    phase[tick] = (t1 - t0, t2 - t1, t3 - t2, t4 - t3, (c2 - c1) + (cpu_ns() - c3) if timed_cpu else 0)
+                tick += 1
+                if watchdog is not None:
+                    watchdog.heartbeat = time.monotonic()
+                if frame.state == SAFE_CODE:
+                    reason = supervisor.fault or "safe state"
+                    faults.append(reason)
+                    if telemetry is not None:
+                        telemetry.event(
+                            t, "fault", reason, code=supervisor.fault_kind.value if supervisor.fault_kind else 0
+                        )
+                    break
+        finally:
+            errors.count, errors.sum_sq, errors.sum_abs, errors.max_abs = count, sum_sq, sum_abs, max_abs
+        if self.stop_requested.is_set() and telemetry is not None:
             telemetry.event(scheduler.index * period, "stop", "stop requested (signal); valve vented")
-        return bus_errors

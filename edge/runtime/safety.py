@@ -1,9 +1,11 @@
 """Safety state machine around the control law: configure -> armed -> running -> safe.
 
-The supervisor is pure like the tick: each call gets the tick's readings and health flags and
-returns the command to send. Any fault moves it to ``SAFE`` in that same tick: the command is
-the vent state (valve disabled, zero pressure) and the reason is kept. ``SAFE`` is latched:
-only :meth:`Supervisor.reset` leaves it, back to ``CONFIGURED``.
+The supervisor is pure like the control law: each tick it checks the frame the runtime read
+(:mod:`edge.runtime.frame`) and fills its command, or vents. One rule covers every device: a
+non-zero ``rd_<device>`` (this tick's read) or ``wr_<device>`` (the latest write, so a failing
+valve DAC is seen too) counts towards ``bus_error_streak`` consecutive ticks. Any fault moves
+it to ``SAFE`` in that same tick: the command is the vent state (valve disabled, zero pressure)
+and the reason is kept. ``SAFE`` is latched: only :meth:`Supervisor.reset` leaves it.
 
 A stuck sensor stays in range, so range checks miss it: a reading that has not changed by a
 single bit for ``stuck_window_s`` while the command swept more than ``stuck_command_span_bar``
@@ -12,11 +14,13 @@ is declared stuck (a live sensor on a moving muscle always shows at least its no
 
 from __future__ import annotations
 
+import errno as errno_codes
 import math
 from dataclasses import dataclass, field
 from enum import Enum
+from typing import Any
 
-from edge.control.tick import Command, Controller, Readings
+from edge.control.tick import Command, Controller, Readings, ScratchFrame
 
 
 class Fault(Enum):
@@ -32,6 +36,7 @@ class Fault(Enum):
     TRACKING = 8
     MODEL_OUTPUT = 9
     WATCHDOG = 10
+    TELEMETRY = 11
 
 
 class State(Enum):
@@ -39,6 +44,11 @@ class State(Enum):
     ARMED = "armed"
     RUNNING = "running"
     SAFE = "safe"
+
+
+STATE_CODES = {state: i for i, state in enumerate(State)}
+SAFE_CODE = STATE_CODES[State.SAFE]
+RUNNING_CODE = STATE_CODES[State.RUNNING]
 
 
 @dataclass(frozen=True)
@@ -56,21 +66,18 @@ class SafetyLimits:
     stuck_command_span_bar: float = 0.5
 
 
-@dataclass(slots=True)  # built every tick: slots, not frozen (a frozen init costs ~0.15 us per field)
+@dataclass(slots=True)
 class Health:
-    """What the runtime learned about this tick apart from the readings."""
+    """For :meth:`Supervisor.tick` (no frame): what the caller learned apart from the readings."""
 
     bus_error: bool = False
     overrun: bool = False
     estop: bool = False
 
 
-HEALTHY = Health()
-
-
-@dataclass(slots=True)  # built every tick: slots, not frozen (a frozen init costs ~0.15 us per field)
+@dataclass(slots=True)
 class Outcome:
-    """The tick's decision: what to command, whether the valve stays enabled, the state."""
+    """:meth:`Supervisor.tick`'s decision: command, valve enable, state, fault."""
 
     pressure_bar: float
     valve_enabled: bool
@@ -78,9 +85,6 @@ class Outcome:
     fault: str | None = None
     command: Command | None = None
     fault_kind: Fault | None = None
-
-
-VENT = 0.0
 
 
 @dataclass
@@ -103,38 +107,61 @@ class StuckDetector:
             self._value, self._since = value, t
             self._low = self._high = command_bar
             return 0.0
-        self._low, self._high = min(self._low, command_bar), max(self._high, command_bar)
+        if command_bar < self._low:
+            self._low = command_bar
+        elif command_bar > self._high:
+            self._high = command_bar
         frozen = t - self._since
         return frozen if frozen >= self.window_s and self._high - self._low > self.command_span_bar else 0.0
 
 
+def _errno_name(code: int) -> str:
+    return errno_codes.errorcode.get(code, str(code))
+
+
 @dataclass
 class Supervisor:
-    """Runs ``controller`` while everything is healthy; vents and latches on the first fault."""
+    """Runs ``controller`` while everything is healthy; vents and latches on the first fault.
+
+    Args:
+        controller: the control law.
+        limits: the ``[safety]`` bounds.
+        status_fields: ``(device, read field, write field)`` of every device in the frame.
+        channel_limits: ``(field, min, max)`` of further channels to range-check.
+        period_s: the tick period [s] (lateness beyond it is an overrun).
+    """
 
     controller: Controller
     limits: SafetyLimits = field(default_factory=SafetyLimits)
+    status_fields: tuple[tuple[str, str, str], ...] = ()
+    channel_limits: tuple[tuple[str, float, float], ...] = ()
+    period_s: float = 0.001
     state: State = State.CONFIGURED
     fault: str | None = None
     fault_kind: Fault | None = None
+    device_errors: dict[str, str] = field(default_factory=dict)  # latest message per device (runtime fills)
     _bus_errors: int = 0
     _overruns: int = 0
-    _last_pressure: float = 0.0
-    _armed_at: float | None = None
-    _stuck: dict[str, StuckDetector] = field(default_factory=dict)
+    _armed_at: float = math.nan
+    _stuck: tuple[StuckDetector, StuckDetector] = field(init=False)
+    _status: Any = None
+    _status_zero: bytes = b""
 
     def __post_init__(self) -> None:
+        self._period_us = self.period_s * 1e6
         lim = self.limits
-        self._stuck = {name: StuckDetector(lim.stuck_window_s, lim.stuck_command_span_bar) for name in ("y", "p")}
+        self._stuck = (
+            StuckDetector(lim.stuck_window_s, lim.stuck_command_span_bar),
+            StuckDetector(lim.stuck_window_s, lim.stuck_command_span_bar),
+        )
 
     def arm(self, readings: Readings) -> None:
         if self.state is not State.CONFIGURED:
             raise RuntimeError(f"cannot arm from {self.state.value}; reset first")
         self.controller.arm(readings)
         self._bus_errors = self._overruns = 0
-        self._armed_at = None
-        self._last_pressure = 0.0
-        for detector in self._stuck.values():
+        self._armed_at = math.nan
+        for detector in self._stuck:
             detector.reset()
         self.state = State.ARMED
 
@@ -142,66 +169,163 @@ class Supervisor:
         """Leave the latched safe state (an operator's explicit action)."""
         self.state, self.fault, self.fault_kind = State.CONFIGURED, None, None
 
-    def _trip(self, kind: Fault, reason: str) -> Outcome:
+    def trip(self, frame: Any, kind: Fault, reason: str) -> None:
+        """Vent and latch (first fault wins); also for faults found outside the tick."""
         if self.state is not State.SAFE:
             self.state, self.fault, self.fault_kind = State.SAFE, reason, kind
-        return Outcome(VENT, False, self.state, self.fault, None, self.fault_kind)
+        self._vent(frame)
 
-    def trip(self, kind: Fault, reason: str) -> Outcome:
-        """A fault found outside the tick (the runtime's watchdog): vent and latch."""
-        return self._trip(kind, reason)
+    def _vent(self, frame: Any) -> None:
+        frame.u_bar, frame.valve_enable = 0.0, 0.0
+        frame.state = STATE_CODES[self.state]
+        frame.fault = self.fault_kind.value if self.fault_kind else 0
 
-    def tick(self, t: float, dt: float, readings: Readings | None, health: Health | None = None) -> Outcome:
-        """One tick: ``readings`` is None when the sensors could not be read this tick."""
-        health = health or HEALTHY
-        if self.state in (State.CONFIGURED, State.SAFE):
-            return Outcome(VENT, False, self.state, self.fault, None, self.fault_kind)
+    def _device_fault(self, frame: Any) -> str | None:
+        """The one rule: the first device whose read or latest write failed, described."""
+        for device, read, write in self.status_fields:
+            code = getattr(frame, read)
+            if code:
+                return f"{device} read failed ({_errno_name(code)}): {self.device_errors.get(device, '')}".rstrip(": ")
+            code = getattr(frame, write)
+            if code:
+                return f"{device} write failed ({_errno_name(code)}): {self.device_errors.get(device, '')}".rstrip(": ")
+        return None
+
+    def bind(self, status: Any) -> None:
+        """Check the device statuses of the frame through ``status``, a ctypes byte array over
+        all its ``rd_*`` / ``wr_*`` fields (one comparison per tick instead of one per field)."""
+        self._status, self._status_zero = status, bytes(len(status.raw))
+
+    def step(self, frame: Any, dt: float) -> None:
+        """Check ``frame`` (read this tick) and fill its command, or vent it (see module doc)."""
+        state = self.state
+        if state is State.CONFIGURED or state is State.SAFE:
+            self._vent(frame)
+            return None
         lim = self.limits
-        if health.estop:
-            return self._trip(Fault.ESTOP, "e-stop pressed")
-        self._bus_errors = self._bus_errors + 1 if health.bus_error or readings is None else 0
-        if self._bus_errors >= lim.bus_error_streak:
-            return self._trip(Fault.BUS, f"{self._bus_errors} consecutive bus errors")
-        self._overruns = self._overruns + 1 if health.overrun else 0
-        if self._overruns >= lim.overrun_streak:
-            return self._trip(Fault.OVERRUN, f"{self._overruns} consecutive deadline overruns")
-        if readings is None:
-            return Outcome(VENT if self.state is State.ARMED else self._last_pressure, True, self.state)
-        y, p = readings.contraction_mm, readings.pressure_bar
-        if not math.isfinite(y):
-            return self._trip(Fault.SENSOR_NONFINITE, "contraction reading is not finite")
+        if frame.estop == 1.0:
+            return self.trip(frame, Fault.ESTOP, "e-stop pressed")
+        status = self._status
+        failed = None
+        if status is None or status.raw != self._status_zero:
+            failed = self._device_fault(frame) if self.status_fields else None
+        if failed is not None:
+            self._bus_errors += 1
+            if self._bus_errors >= lim.bus_error_streak:
+                return self.trip(
+                    frame, Fault.BUS, f"{self._bus_errors} consecutive ticks with a device error; {failed}"
+                )
+        elif self._bus_errors:
+            self._bus_errors = 0
+        if frame.lateness_us > self._period_us:
+            self._overruns += 1
+            if self._overruns >= lim.overrun_streak:
+                return self.trip(frame, Fault.OVERRUN, f"{self._overruns} consecutive deadline overruns")
+        elif self._overruns:
+            self._overruns = 0
+        t, y, p = frame.t, frame.contraction_mm, frame.pressure_bar
+        controller = self.controller
+        if failed is not None and y != y:  # the sensor's device failed this tick: hold
+            frame.valve_enable = 1.0
+            frame.u_bar = 0.0 if state is State.ARMED else controller._last_bar
+            frame.state, frame.fault = STATE_CODES[state], 0
+            return None
         if not lim.contraction_min_mm <= y <= lim.contraction_max_mm:
-            return self._trip(
+            if y != y or y in (math.inf, -math.inf):
+                return self.trip(frame, Fault.SENSOR_NONFINITE, "contraction reading is not finite")
+            return self.trip(
+                frame,
                 Fault.SENSOR_RANGE,
                 f"contraction {y:.1f} mm outside {lim.contraction_min_mm}..{lim.contraction_max_mm} mm "
                 "(sensor disconnected or saturated?)",
             )
-        if math.isfinite(p) and p > lim.pressure_max_bar:
-            return self._trip(Fault.OVERPRESSURE, f"overpressure {p:.2f} bar > {lim.pressure_max_bar} bar")
-        if self._armed_at is None:
+        if p > lim.pressure_max_bar:
+            return self.trip(frame, Fault.OVERPRESSURE, f"overpressure {p:.2f} bar > {lim.pressure_max_bar} bar")
+        if self.channel_limits:
+            for name, low, high in self.channel_limits:
+                value = getattr(frame, name)
+                if not low <= value <= high:
+                    return self.trip(frame, Fault.SENSOR_RANGE, f"{name} {value:.3g} outside {low:g}..{high:g}")
+        if self._armed_at != self._armed_at:
             self._armed_at = t
-        for name, value, label in (("y", y, "contraction"), ("p", p, "pressure")):
-            frozen = self._stuck[name].stuck_for(t, value, self._last_pressure) if math.isfinite(value) else 0.0
+        last = controller._last_bar
+        stuck_y, stuck_p = self._stuck
+        frozen = stuck_y.stuck_for(t, y, last)
+        if frozen:
+            return self._stuck_trip(frame, "contraction", y, frozen)
+        if p == p:
+            frozen = stuck_p.stuck_for(t, p, last)
             if frozen:
-                return self._trip(
-                    Fault.SENSOR_STUCK,
-                    f"{label} sensor stuck at {value:.3f} for {frozen:.2f} s while the command swept "
-                    f"> {lim.stuck_command_span_bar} bar",
-                )
-        command = self.controller.tick(t, dt, readings)
-        if not math.isfinite(command.feedforward_bar + command.correction_bar):
-            return self._trip(
+                return self._stuck_trip(frame, "pressure", p, frozen)
+        u = controller.fill_from(frame, dt, t, y, p)
+        bias = controller.bias_bar_
+        if bias - bias != 0.0:  # inf or nan
+            return self.trip(
+                frame,
                 Fault.MODEL_OUTPUT,
-                f"model output not finite (feedforward {command.feedforward_bar}, correction {command.correction_bar})",
+                f"model output not finite (feedforward {frame.u_ff_bar}, correction {frame.u_nn_bar})",
             )
-        if not math.isfinite(command.pressure_bar):
-            return self._trip(Fault.MODEL_OUTPUT, "control output is not finite")
-        settled = t - self._armed_at >= lim.tracking_grace_s
-        if settled and abs(command.reference_mm - y) > lim.tracking_error_max_mm:
-            return self._trip(
-                Fault.TRACKING,
-                f"tracking error {abs(command.reference_mm - y):.1f} mm > {lim.tracking_error_max_mm} mm",
+        if u - u != 0.0:
+            return self.trip(frame, Fault.MODEL_OUTPUT, "control output is not finite")
+        error = controller.reference_mm_ - y
+        if (
+            error > lim.tracking_error_max_mm or -error > lim.tracking_error_max_mm
+        ) and t - self._armed_at >= lim.tracking_grace_s:
+            return self.trip(
+                frame, Fault.TRACKING, f"tracking error {abs(error):.1f} mm > {lim.tracking_error_max_mm} mm"
             )
         self.state = State.RUNNING
-        self._last_pressure = command.pressure_bar
-        return Outcome(command.pressure_bar, True, self.state, None, command)
+        frame.valve_enable, frame.state, frame.fault = 1.0, RUNNING_CODE, 0
+        return None
+
+    def _stuck_trip(self, frame: Any, label: str, value: float, frozen: float) -> None:
+        self.trip(
+            frame,
+            Fault.SENSOR_STUCK,
+            f"{label} sensor stuck at {value:.3f} for {frozen:.2f} s while the command swept "
+            f"> {self.limits.stuck_command_span_bar} bar",
+        )
+
+    def tick(self, t: float, dt: float, readings: Readings | None, health: Health | None = None) -> Outcome:
+        """:meth:`step` on plain values (no frame); ``readings`` is None when the sensors could
+        not be read this tick."""
+        health = health or Health()
+        frame = ScratchFrame(t, *(readings.contraction_mm, readings.pressure_bar) if readings else (math.nan, math.nan))
+        frame.estop = 1.0 if health.estop else 0.0
+        frame.lateness_us = 2e6 * self.period_s if health.overrun else 0.0
+        bus_error = health.bus_error or readings is None
+        saved = self.status_fields
+        if bus_error:
+            self.status_fields = (("sensors", "bus_error", "bus_error"),)
+        try:
+            frame_with_status = _WithStatus(frame, 5 if bus_error else 0)  # EIO
+            self.step(frame_with_status, dt)
+        finally:
+            self.status_fields = saved
+        valve = frame.valve_enable == 1.0
+        command = None
+        if valve and self.state is State.RUNNING and readings is not None:
+            u = frame.u_bar
+            command = Command(
+                u,
+                frame.reference_mm,
+                frame.u_ff_bar,
+                frame.u_nn_bar,
+                frame.u_fb_bar,
+                u != frame.u_ff_bar + frame.u_nn_bar + frame.u_fb_bar,
+            )
+        return Outcome(frame.u_bar if valve else 0.0, valve, self.state, self.fault, command, self.fault_kind)
+
+
+class _WithStatus:
+    """A scratch frame plus one status field (``bus_error``) for :meth:`Supervisor.tick`."""
+
+    def __init__(self, frame: ScratchFrame, code: int) -> None:
+        object.__setattr__(self, "_frame", frame)
+        object.__setattr__(self, "bus_error", code)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._frame, name)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        setattr(self._frame, name, value)

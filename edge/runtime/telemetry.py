@@ -1,43 +1,38 @@
-"""Per-tick telemetry: a bounded ring the tick writes into, drained to a file by a thread.
+"""Per-tick telemetry: a bounded ring the tick copies its frame into, drained to a file by a
+thread.
 
-The tick only stores one row into a preallocated array and bumps a counter: it never waits for
-the disk. A writer thread copies finished rows to the file every ``flush_interval_s``. If the
-disk stalls for longer than the ring holds, the oldest unwritten rows are overwritten and
-counted in ``dropped`` (the tick still never blocks). :meth:`TelemetryWriter.close` drains
+The tick only copies one row (its frame, :mod:`edge.runtime.frame`) into a preallocated ring
+and bumps a counter: it never waits for the disk. A writer thread appends finished rows to the
+file every ``flush_interval_s``. If the disk stalls for longer than the ring holds, the oldest
+unwritten rows are overwritten and counted in ``dropped``. A write that fails (a full disk)
+stops the writer and sets :attr:`TelemetryWriter.failure`; the runtime turns it into a fault
+(the valve vents, the summary is still printed). :meth:`TelemetryWriter.close` drains
 everything and fsyncs, so a normal stop or SIGTERM leaves a complete file.
 
-File layout: a magic line ``PMACTL-TELEMETRY 1``, one JSON header line (columns, codes, run
-information), then rows of little-endian float64, one per tick. Events (arming, faults, notes)
-go to ``<file>.events.jsonl`` as they happen, one JSON object per line.
+A run never overwrites another: the file is created exclusively (an existing path is refused).
+
+File layout: a magic line ``PMACTL-TELEMETRY 2``, one JSON header line (``columns``, ``dtype``
+as numpy's ``descr``, codes, run information), then packed little-endian rows of that dtype,
+one per tick. Events (arming, faults, the end of the run with its summary) go to
+``<file>.events.jsonl`` as they happen, one JSON object per line. Version 1 files (all columns
+float64) are still read.
 """
 
 from __future__ import annotations
 
+import ctypes
 import json
 import os
 import threading
-from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from edge.errors import DataError
 
-MAGIC = b"PMACTL-TELEMETRY 1\n"
-COLUMNS = (
-    "t",
-    "reference_mm",
-    "contraction_mm",
-    "pressure_bar",
-    "u_ff_bar",
-    "u_nn_bar",
-    "u_fb_bar",
-    "u_bar",
-    "state",
-    "fault",
-    "lateness_us",
-)
-ROW_DTYPE = np.dtype("<f8")
+MAGIC = b"PMACTL-TELEMETRY 2\n"
+MAGIC_V1 = b"PMACTL-TELEMETRY 1\n"
 
 
 def events_path(path: str | Path) -> Path:
@@ -48,8 +43,9 @@ class TelemetryWriter:
     """Ring buffer + writer thread (see module docstring).
 
     Args:
-        path: telemetry file to create (replaced if present).
+        path: telemetry file to create (refused if it exists).
         header: run information stored in the header line (JSON-serialisable).
+        dtype: the row type (a frame's structured dtype).
         ring_ticks: rows the ring holds.
         flush_interval_s: how often the writer drains the ring [s].
     """
@@ -58,111 +54,145 @@ class TelemetryWriter:
         self,
         path: str | Path,
         header: dict[str, object],
+        dtype: np.dtype,
         ring_ticks: int = 65_536,
         flush_interval_s: float = 0.1,
     ) -> None:
         self.path = Path(path)
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._file = self.path.open("wb")
-            self._events_file = events_path(self.path).open("w")
         except OSError as exc:
             raise DataError(f"{self.path}: cannot write telemetry ({exc.strerror}); choose a writable path") from exc
-        self._ring = np.zeros((ring_ticks, len(COLUMNS)), dtype=ROW_DTYPE)
+        try:
+            self._file = self.path.open("xb")
+        except FileExistsError as exc:
+            raise DataError(
+                f"{self.path}: exists, and a run never overwrites another; choose a new path "
+                "(a {time} in the name is replaced by the start time)"
+            ) from exc
+        except OSError as exc:
+            raise DataError(f"{self.path}: cannot write telemetry ({exc.strerror}); choose a writable path") from exc
+        try:
+            self._events_file = events_path(self.path).open("x")
+        except OSError as exc:
+            self._file.close()
+            self.path.unlink()
+            raise DataError(f"{events_path(self.path)}: cannot create the event log ({exc.strerror})") from exc
+        self.dtype = dtype
+        self._ring = np.zeros(ring_ticks, dtype=dtype)
+        self._base = self._ring.ctypes.data
+        self._ring_bytes = self._ring.view(np.uint8).data
+        self._source: memoryview | None = None
+        self._row_bytes = dtype.itemsize
         self._size = ring_ticks
         self._head = 0  # rows the tick has written (monotonic)
         self._tail = 0  # rows the writer has taken
         self.dropped = 0
         self.written = 0
+        self.failure: str | None = None  # set once when a write fails (the runtime trips on it)
         self._events: list[str] = []
         self._lock = threading.Lock()  # guards _events only; the ring is single-producer
-        self._file.write(MAGIC + json.dumps({"columns": COLUMNS, "dtype": ROW_DTYPE.str, **header}).encode() + b"\n")
-        self._file.flush()
+        self._write_header(header)
         self._stop = threading.Event()
         self._interval = flush_interval_s
         self._thread = threading.Thread(target=self._run, name="pmactl-telemetry", daemon=True)
         self._thread.start()
 
+    def _write_header(self, header: dict[str, object]) -> None:
+        meta = {"columns": list(self.dtype.names or ()), "dtype": self.dtype.descr, **header}
+        try:
+            self._file.write(MAGIC + json.dumps(meta).encode() + b"\n")
+            self._file.flush()
+        except OSError as exc:
+            self._fail(exc)
+
     # tick side --------------------------------------------------------------------------------
-    def record(self, row: tuple[float, ...]) -> None:
-        """Store one tick's row (values in :data:`COLUMNS` order). Never blocks."""
+    def record(self, frame: Any) -> None:
+        """Copy one tick's frame (a ctypes row of :attr:`dtype`) into the ring. Never blocks."""
+        ctypes.memmove(
+            self._base + (self._head % self._size) * self._row_bytes, ctypes.addressof(frame), self._row_bytes
+        )
+        self._head += 1
+
+    def bind(self, frame_bytes: memoryview) -> None:
+        """The frame :meth:`record_bound` copies (its bytes, ``FrameLayout.bytes_view``)."""
+        if len(frame_bytes) != self._row_bytes:
+            raise ValueError(f"frame of {len(frame_bytes)} bytes, rows of {self._row_bytes}")
+        self._source = frame_bytes
+
+    def record_bound(self) -> None:
+        """Copy the bound frame into the ring (a slice copy: ~0.3 us). Never blocks."""
+        start = (self._head % self._size) * self._row_bytes
+        self._ring_bytes[start : start + self._row_bytes] = self._source  # type: ignore[assignment]
+        self._head += 1
+
+    def record_array(self, row: np.ndarray) -> None:
+        """Store one row given as a numpy structured scalar/array of :attr:`dtype`."""
         self._ring[self._head % self._size] = row
         self._head += 1
 
-    def event(self, t: float, kind: str, text: str) -> None:
+    def event(self, t: float, kind: str, text: str, **extra: object) -> None:
         """A state change, fault or note, written within one flush interval."""
-        line = json.dumps({"t": round(t, 6), "kind": kind, "text": text})
+        line = json.dumps({"t": round(t, 6), "kind": kind, "text": text, **extra})
         with self._lock:
             self._events.append(line)
 
     # writer side ------------------------------------------------------------------------------
     def _run(self) -> None:
-        while not self._stop.wait(self._interval):
+        while not self._stop.wait(self._interval) and self.failure is None:
             self._drain()
 
+    def _fail(self, exc: OSError) -> None:
+        if self.failure is None:
+            self.failure = f"telemetry write to {self.path} failed ({exc.strerror or exc}); rows from here on are lost"
+
     def _drain(self) -> None:
+        if self.failure is not None:
+            return
         head = self._head
         if head - self._tail > self._size:
             self.dropped += head - self._tail - self._size
             self._tail = head - self._size
         start, stop = self._tail % self._size, head % self._size
-        if head > self._tail:
-            if start < stop:
-                chunk = self._ring[start:stop].copy()
-            else:
-                chunk = np.concatenate([self._ring[start:], self._ring[:stop]])
-            self._file.write(chunk.tobytes())
-            self.written += len(chunk)
-            self._tail = head
-        self._file.flush()
-        with self._lock:
-            events, self._events = self._events, []
-        if events:
-            self._events_file.write("\n".join(events) + "\n")
-            self._events_file.flush()
+        try:
+            if head > self._tail:
+                if start < stop:
+                    chunk = self._ring[start:stop].copy()
+                else:
+                    chunk = np.concatenate([self._ring[start:], self._ring[:stop]])
+                self._file.write(chunk.tobytes())
+                self.written += len(chunk)
+                self._tail = head
+            self._file.flush()
+            with self._lock:
+                events, self._events = self._events, []
+            if events:
+                self._events_file.write("\n".join(events) + "\n")
+                self._events_file.flush()
+        except OSError as exc:
+            self._fail(exc)
 
     def close(self) -> None:
-        """Stop the writer, write every remaining row and event, fsync."""
+        """Stop the writer, write every remaining row and event, fsync (as far as the disk lets)."""
         if self._file.closed:
             return
         self._stop.set()
         self._thread.join()
         self._drain()
         for handle in (self._file, self._events_file):
-            os.fsync(handle.fileno())
-            handle.close()
+            try:
+                handle.flush()
+                os.fsync(handle.fileno())
+            except OSError as exc:
+                self._fail(exc)
+            try:
+                handle.close()
+            except OSError as exc:  # a buffered write that still cannot go out
+                self._fail(exc)
 
 
-@dataclass
-class Telemetry:
-    """A telemetry file read back: header, rows (one per tick) and events."""
+def read_telemetry(path: str | Path) -> Any:
+    """Read a telemetry file back (:func:`edge.runtime.telemetry_read.read_telemetry`)."""
+    from edge.runtime.telemetry_read import read_telemetry as read
 
-    header: dict[str, object]
-    rows: np.ndarray
-    events: list[dict[str, object]]
-    truncated_bytes: int = 0
-
-    def column(self, name: str) -> np.ndarray:
-        return self.rows[:, list(self.header["columns"]).index(name)]  # type: ignore[call-overload]
-
-
-def read_telemetry(path: str | Path) -> Telemetry:
-    """Read a telemetry file; a partly written last row (power cut) is ignored and counted."""
-    source = Path(path)
-    try:
-        data = source.read_bytes()
-    except FileNotFoundError as exc:
-        raise DataError(f"{source}: no such telemetry file") from exc
-    if not data.startswith(MAGIC):
-        raise DataError(f"{source}: not a pmactl telemetry file (written by pmactl edge run --telemetry)")
-    end = data.index(b"\n", len(MAGIC))
-    header = json.loads(data[len(MAGIC) : end])
-    body = memoryview(data)[end + 1 :]
-    width = len(header["columns"]) * ROW_DTYPE.itemsize
-    whole = len(body) // width * width
-    rows = np.frombuffer(body[:whole], dtype=header["dtype"]).reshape(-1, len(header["columns"]))
-    events = []
-    log = events_path(source)
-    if log.exists():
-        events = [json.loads(line) for line in log.read_text().splitlines() if line.strip()]
-    return Telemetry(header, rows, events, len(body) - whole)
+    return read(path)

@@ -13,8 +13,7 @@ import sys
 import warnings
 from collections.abc import Callable, Sequence
 
-from hil.effects import EFFECTS
-from hil.scenarios import SCENARIOS
+from edge import cli as edge_cli
 from host.cli.errors import OneLineParser, print_error
 from host.cli.options import add_fit_options, add_hil_options, positive_rate, version
 
@@ -31,10 +30,13 @@ def _lazy(module: str, function: str = "run") -> Callable[[argparse.Namespace], 
 def _hil_serve(args: argparse.Namespace) -> int:
     from hil.serve import serve
 
-    return serve(args.effect, args.seed, args.rate, args.duration)
+    return serve(args.effect, args.seed, args.rate, args.duration, args.config)
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from hil.effects import EFFECTS  # here, not at the top: pmactl edge never imports hil
+    from hil.scenarios import SCENARIOS
+
     parser = OneLineParser(
         prog="pmactl",
         description="Pneumatic muscle actuator control: hysteresis identification, models, deployment.",
@@ -84,30 +86,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     importlib.import_module("host.cli.diagnose").register(sub)
 
-    edge = sub.add_parser("edge", help="the control loop that runs on the rig's computer")
-    edge_sub = edge.add_subparsers(dest="edge_command", required=True, metavar="EDGE_COMMAND")
-    erun = edge_sub.add_parser("run", help="run the fixed-rate control loop on the rig a config names")
-    erun.add_argument("--config", required=True, metavar="RIG.toml", help="rig config (docs/examples/*.toml)")
-    erun.add_argument("--bundle", required=True, metavar="DIR", help="model bundle written by pmactl fit --save")
-    erun.add_argument("--duration", type=float, metavar="S", help="seconds to run (default: the reference's length)")
-    erun.add_argument(
-        "--reference",
-        default="sine:amplitude=30,frequency=0.2,offset=40",
-        metavar="SPEC",
-        help="desired contraction: sine:amplitude=,frequency=,offset= | ramp-sine:peak=,frequency=,offset=,rise=,hold= "
-        "| const:value= | a CSV with t,y_ref (default: seed 000's 30 sin(2 pi 0.2 t) + 40 mm)",
-    )
-    erun.add_argument("--no-feedforward", action="store_true", help="PID alone (no inverse-hysteresis feedforward)")
-    erun.add_argument("--no-correction", action="store_true", help="ignore the bundle's ONNX correction")
-    erun.add_argument("--settle", type=float, default=0.0, metavar="S", help="leave the first S seconds unscored")
-    erun.add_argument("--telemetry", metavar="FILE", help="write per-tick telemetry here (+ FILE.events.jsonl)")
-    erun.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    erun.set_defaults(run=_lazy("host.cli.edge"))
-    etel = edge_sub.add_parser("telemetry", help="turn a telemetry file into CSV and a plot")
-    etel.add_argument("file", metavar="FILE", help="telemetry written by pmactl edge run --telemetry")
-    etel.add_argument("--csv", metavar="OUT.csv", help="write every telemetry row as CSV here")
-    etel.add_argument("--plot", metavar="OUT.png", help="plot reference, output and command (.png, .pdf or .svg)")
-    etel.set_defaults(run=_lazy("host.cli.edge", "telemetry"))
+    edge_cli.register(sub)
 
     hil = sub.add_parser("hil", help="the emulated rig: recordings with hidden effects")
     hil_sub = hil.add_subparsers(dest="hil_command", required=True, metavar="HIL_COMMAND")
@@ -135,11 +114,19 @@ def build_parser() -> argparse.ArgumentParser:
     add_hil_options(srv, EFFECTS)
     srv.add_argument("--rate", type=positive_rate, default=1000.0, metavar="HZ", help="sample frames per second")
     srv.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: until SIGTERM)")
+    srv.add_argument("--config", metavar="RIG.toml", help="wire sensors and valve as this rig config says")
     srv.set_defaults(run=_hil_serve)
     importlib.import_module("host.cli.bundle").register(sub)
     importlib.import_module("host.cli.deploy").register(sub)
     importlib.import_module("host.cli.sweep").register(sub)
     importlib.import_module("host.cli.identify").register(sub)
+    return parser
+
+
+def _edge_parser() -> argparse.ArgumentParser:
+    parser = OneLineParser(prog="pmactl", description="pmactl edge runtime")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    edge_cli.register(sub)
     return parser
 
 
@@ -151,7 +138,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     arguments = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in arguments
-    args = build_parser().parse_args([a for a in arguments if a != "--debug"])
+    arguments = [a for a in arguments if a != "--debug"]
+    # the SBC path: pmactl edge ... parses with the edge subcommands alone (no hil, no host tools)
+    parser = _edge_parser() if arguments[:1] == ["edge"] else build_parser()
+    args = parser.parse_args(arguments)
     run: Callable[[argparse.Namespace], int] = args.run
     warnings.showwarning = _one_line_warning
     try:

@@ -1,0 +1,201 @@
+"""``pmactl edge run`` and ``pmactl edge telemetry``: the runtime from the command line.
+
+Nothing here imports ``host``, ``hil``, scipy, matplotlib or torch (``--plot`` imports
+matplotlib when asked), so the SBC runs the loop with only ``pmactl[edge]``: as
+``pmactl edge ...`` or ``python -m edge ...``. SIGTERM and SIGINT end the loop cleanly: the
+valve is vented, telemetry drained, the summary printed. Errors are one line, exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import signal
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from edge.errors import DataError, PmactlError
+
+DEFAULT_REFERENCE = "sine:amplitude=30,frequency=0.2,offset=40"
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``edge run`` and ``edge telemetry`` to the ``pmactl`` command line."""
+    edge = sub.add_parser("edge", help="the control loop that runs on the rig's computer")
+    edge_sub = edge.add_subparsers(dest="edge_command", required=True, metavar="EDGE_COMMAND")
+    erun = edge_sub.add_parser("run", help="run the fixed-rate control loop on the rig a config names")
+    erun.add_argument("--config", required=True, metavar="RIG.toml", help="rig config (docs/examples/*.toml)")
+    erun.add_argument("--bundle", required=True, metavar="DIR", help="model bundle written by pmactl fit --save")
+    erun.add_argument("--duration", type=float, metavar="S", help="seconds to run (default: the reference's length)")
+    erun.add_argument(
+        "--reference",
+        default=DEFAULT_REFERENCE,
+        metavar="SPEC",
+        help="desired contraction: sine:amplitude=,frequency=,offset= | ramp-sine:peak=,frequency=,offset=,rise=,hold= "
+        "| const:value= | a CSV with t,y_ref (default: seed 000's 30 sin(2 pi 0.2 t) + 40 mm)",
+    )
+    erun.add_argument("--no-feedforward", action="store_true", help="PID alone (no inverse-hysteresis feedforward)")
+    erun.add_argument("--no-correction", action="store_true", help="ignore the bundle's ONNX correction")
+    erun.add_argument("--settle", type=float, default=0.0, metavar="S", help="leave the first S seconds unscored")
+    erun.add_argument(
+        "--telemetry",
+        metavar="FILE",
+        help="write per-tick telemetry to this new file (+ FILE.events.jsonl); an existing file is refused, "
+        "{time} in the name becomes the start time",
+    )
+    erun.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    erun.set_defaults(run=run)
+    etel = edge_sub.add_parser("telemetry", help="summarise a telemetry file; export CSV, MCAP or a plot")
+    etel.add_argument("file", metavar="FILE", help="telemetry written by pmactl edge run --telemetry")
+    etel.add_argument("--csv", metavar="OUT.csv")
+    etel.add_argument("--mcap", metavar="OUT.mcap", help="for Foxglove / PlotJuggler (one JSON message per tick)")
+    etel.add_argument("--plot", metavar="OUT.png", help="needs matplotlib (the host extra)")
+    etel.set_defaults(run=telemetry)
+
+
+def run(args: argparse.Namespace) -> int:
+    from edge.control.reference import parse_reference
+    from edge.runtime.bundle import load_bundle
+    from edge.runtime.config import load_config
+    from edge.runtime.run import EdgeRuntime, check_duration
+
+    config = load_config(args.config)
+    reference = parse_reference(args.reference)
+    check_duration(args.duration, args.settle, reference)
+    if args.telemetry and "{time}" not in args.telemetry and Path(args.telemetry).exists():
+        raise DataError(
+            f"{args.telemetry}: exists, and a run never overwrites another; choose a new path "
+            "(a {time} in the name is replaced by the start time)"
+        )
+    bundle = load_bundle(args.bundle, trusted_keys=config.bundle_trusted_keys or None)
+    runtime = EdgeRuntime(
+        config,
+        bundle,
+        reference,
+        feedforward=not args.no_feedforward,
+        use_correction=not args.no_correction,
+        telemetry_path=args.telemetry,
+        settle_s=args.settle,
+    )
+
+    def request_stop(*_: object) -> None:
+        runtime.stop_requested.set()
+
+    previous = {sig: signal.signal(sig, request_stop) for sig in (signal.SIGTERM, signal.SIGINT)}
+    try:
+        summary = runtime.run(args.duration)
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    result = summary.as_dict()
+    if args.json:
+        print(json.dumps(result), flush=True)
+    else:
+        _print_summary(result)
+    for fault in summary.faults:
+        print(f"pmactl edge: FAULT: {fault} (valve vented)", file=sys.stderr)
+    return 1 if summary.faults else 0
+
+
+def _print_summary(result: dict[str, object]) -> None:
+    def mm(key: str) -> str:
+        value = result[key]
+        return f"{value:.3f} mm" if isinstance(value, float) else "n/a"
+
+    lateness = result["lateness"]
+    assert isinstance(lateness, dict)
+    print(
+        f"{result['ticks']} ticks at {result['rate_hz']:g} Hz, reference {result['reference']}, "
+        f"feedforward {'on' if result['feedforward'] else 'off'}, correction {'on' if result['correction'] else 'off'}"
+    )
+    print(f"tracking error: RMS {mm('rms_error')}, mean |e| {mm('mean_abs_error')}, max {mm('max_error')}")
+    print(
+        f"lateness: median {lateness['lateness_median_us']:.0f} us, p99 {lateness['lateness_p99_us']:.0f} us, "
+        f"max {lateness['lateness_max_us']:.0f} us; overruns {result['overruns']}; "
+        f"ticks with a device error {result['bus_errors']}"
+    )
+    print(f"real-time: {'; '.join(result['realtime'])}")  # type: ignore[arg-type]
+    if result["telemetry"]:
+        print(f"telemetry: {result['telemetry']} ({result['telemetry_dropped']} rows dropped)", flush=True)
+
+
+def telemetry(args: argparse.Namespace) -> int:
+    from edge.runtime.telemetry_read import read_telemetry
+
+    for option, path, suffixes in (
+        ("--csv", args.csv, None),
+        ("--mcap", args.mcap, (".mcap",)),
+        ("--plot", args.plot, (".png", ".pdf", ".svg")),
+    ):
+        if path:
+            _check_output(Path(path), option, suffixes)  # before reading: no work lost to a bad path
+    record = read_telemetry(args.file)
+    if args.csv:
+        _write_csv(record, Path(args.csv))
+    if args.mcap:
+        from edge.runtime.mcap_export import export_mcap
+
+        export_mcap(record, Path(args.mcap))
+    if args.plot:
+        from edge.runtime.telemetry_plot import plot
+
+        plot(record, Path(args.plot))
+    bundle = record.header.get("bundle")
+    model = f", model {bundle.get('kind')} {str(bundle.get('id'))[:12]}" if isinstance(bundle, dict) else ""
+    print(
+        f"{args.file}: {len(record.rows)} ticks at {record.header.get('rate_hz')} Hz, "
+        f"{len(record.events)} events{model}"
+    )
+    for event in record.events:
+        print(f"  t={float(event['t']):.3f} s {event['kind']}: {event['text']}")  # type: ignore[arg-type]
+    if record.problems:
+        print(f"pmactl edge telemetry: skipped: {'; '.join(record.problems)}", file=sys.stderr)
+    if not (args.csv or args.plot or args.mcap):
+        print("(add --csv OUT.csv, --mcap OUT.mcap and/or --plot OUT.png to export)", file=sys.stderr)
+    return 0
+
+
+def _check_output(path: Path, option: str, suffixes: tuple[str, ...] | None) -> None:
+    """One line if ``path`` cannot be written as ``option``'s output file."""
+    if suffixes and path.suffix.lower() not in suffixes:
+        raise DataError(f"{option} {path}: unsupported file type; use one of {', '.join(suffixes)}")
+    if path.is_dir():
+        raise DataError(f"{option} {path}: is a directory; name a file")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise DataError(f"{option} {path}: directory {parent} does not exist; create it first")
+
+
+def _write_csv(record: object, path: Path) -> None:
+    import numpy as np
+
+    rows = record.rows  # type: ignore[attr-defined]
+    columns = list(rows.dtype.names)
+    table = np.column_stack([rows[c].astype(np.float64) for c in columns]) if len(rows) else np.empty((0, len(columns)))
+    try:
+        np.savetxt(path, table, delimiter=",", header=",".join(columns), comments="", fmt="%.9g")
+    except OSError as exc:
+        raise DataError(f"{path}: cannot write the CSV ({exc.strerror})") from exc
+
+
+def build_parser(prog: str = "python -m edge") -> argparse.ArgumentParser:
+    """The ``edge`` subcommands alone (``python -m edge``; ``pmactl edge`` on the SBC path)."""
+    parser = argparse.ArgumentParser(prog=prog, description="pmactl edge runtime")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``python -m edge`` (``pmactl edge`` goes through ``host.cli``)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    args = build_parser().parse_args(argv if argv[:1] == ["edge"] else ["edge", *argv])
+    try:
+        return int(args.run(args))
+    except PmactlError as exc:
+        print(f"pmactl edge: error: {exc}", file=sys.stderr)
+    except KeyboardInterrupt:
+        print("pmactl edge: interrupted", file=sys.stderr)
+        return 130
+    return 2
