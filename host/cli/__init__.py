@@ -136,6 +136,8 @@ def build_parser() -> argparse.ArgumentParser:
     srv.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sample frames per second")
     srv.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: until SIGTERM)")
     srv.set_defaults(run=_hil_serve)
+    importlib.import_module("host.cli.train").register(sub)
+    importlib.import_module("host.cli.quantise").register(sub)
     return parser
 
 

@@ -1,0 +1,40 @@
+"""``pmactl quantise``: int8 variants of a bundle's correction net, kept only if they earn it."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add ``pmactl quantise`` to the command line."""
+    from host.cli import _lazy
+
+    quantise = sub.add_parser(
+        "quantise", help="measure int8 variants of a bundle's correction; keep one only if as accurate and faster"
+    )
+    quantise.add_argument("bundle", metavar="DIR", help="bundle with a correction (pmactl train --model correction)")
+    quantise.add_argument(
+        "--calibration", required=True, action="append", metavar="CSV", help="recording (t,u,y) for calibration and scoring"
+    )
+    quantise.add_argument("--json", action="store_true", help="print one JSON object")
+    quantise.set_defaults(run=_lazy("host.cli.quantise"))
+
+
+def run(args: argparse.Namespace) -> int:
+    from host.data import load_measurement
+    from models_export.quantise import quantise_bundle
+
+    records = [load_measurement(path) for path in args.calibration]
+    report = quantise_bundle(args.bundle, records)
+    if args.json:
+        print(json.dumps(report))
+        return 0
+    print(f"{'variant':<22} {'RMSE [bar]':>11} {'vs f32':>8} {'us/step':>8} {'cpu us/step':>11}")
+    for name, m in report["variants"].items():
+        print(
+            f"{name:<22} {m['rmse_bar']:>11.5f} {m['rmse_ratio']:>8.3f} {m['us_per_step_wall']:>8.2f} "
+            f"{m['us_per_step_cpu']:>11.2f}"
+        )
+    print(f"kept: {report['kept']} ({report['reason']})")
+    return 0
