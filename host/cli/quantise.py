@@ -22,18 +22,23 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from host.data import load_measurement
+    from host.train.correction import correction_features
     from models_export.quantise import quantise_bundle
 
-    records = [load_measurement(path) for path in args.calibration]
-    report = quantise_bundle(args.bundle, records)
+    pairs = [correction_features(args.bundle, load_measurement(path)) for path in args.calibration]
+    features = np.concatenate([p[0] for p in pairs])
+    target = np.concatenate([p[1] for p in pairs])
+    report = quantise_bundle(args.bundle, features, target)
     if args.json:
         print(json.dumps(report))
         return 0
-    print(f"{'variant':<22} {'RMSE [bar]':>11} {'vs f32':>8} {'us/step':>8} {'cpu us/step':>11}")
+    print(f"{'variant':<26} {'RMSE [bar]':>11} {'vs f32':>8} {'us/step':>8} {'cpu us/step':>11}")
     for name, m in report["variants"].items():
         print(
-            f"{name:<22} {m['rmse_bar']:>11.5f} {m['rmse_ratio']:>8.3f} {m['us_per_step_wall']:>8.2f} "
+            f"{name:<26} {m['rmse_bar']:>11.5f} {m['rmse_ratio']:>8.3f} {m['us_per_step_wall']:>8.2f} "
             f"{m['us_per_step_cpu']:>11.2f}"
         )
     print(f"kept: {report['kept']} ({report['reason']})")
