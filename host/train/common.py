@@ -120,10 +120,12 @@ class EarlyStopping:
 
 def progress(total: int, description: str, quiet: bool) -> Iterator[int]:
     """``range(total)`` with a tqdm bar on stderr unless ``quiet`` or stderr is not a terminal."""
+    if quiet or not sys.stderr.isatty():
+        yield from range(total)  # no tqdm object at all: it would start its monitor thread
+        return
     from tqdm import tqdm
 
-    disable = quiet or not sys.stderr.isatty()
-    yield from tqdm(range(total), desc=description, file=sys.stderr, disable=disable, leave=False)
+    yield from tqdm(range(total), desc=description, file=sys.stderr, leave=False)
 
 
 def normaliser(x: NDArray[np.float64]) -> tuple[float, float]:
