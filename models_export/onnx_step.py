@@ -129,7 +129,7 @@ def _hammerstein_module(w: HammersteinWeights):  # noqa: ANN202
                 x = layer(x)
                 if i < len(self.layers) - 1:
                     x = torch.tanh(x)
-            v = x * self.y_scale[0] + self.y_scale[1]
+            v = n + x * self.y_scale[0]
             vs = torch.cat([v, v_lags], dim=1)
             y = y_lags @ self.a + vs @ self.b
             return y, torch.cat([y, y_lags[:, :2]], dim=1), torch.cat([v, v_lags[:, :1]], dim=1)

@@ -10,6 +10,8 @@ from pathlib import Path
 from edge.errors import DataError
 from host.data import load_measurement
 
+DEFAULT_EPOCHS = {"hammerstein": 60, "lstm-narmax": 150, "correction": 300}
+
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Add ``pmactl train`` to the command line."""
@@ -22,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     )
     train.add_argument("--test", action="append", default=[], metavar="CSV", help="held-out recording (repeatable)")
     train.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same model")
-    train.add_argument("--epochs", type=int, help="training epochs (default 60; correction 300)")
+    train.add_argument("--epochs", type=int, help="training epochs (default: hammerstein 60, lstm-narmax 150, correction 300)")
     train.add_argument(
         "--calibration",
         type=float,
@@ -47,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
 
     records = [load_measurement(path) for path in args.train]
     tests = [load_measurement(path) for path in args.test]
-    trained = train_model(args.model, records, seed=args.seed, epochs=args.epochs or 60, quiet=args.json)
+    trained = train_model(args.model, records, seed=args.seed, epochs=args.epochs or DEFAULT_EPOCHS[args.model], quiet=args.json)
     results = score_model(trained.model, tests, args.calibration)
     tests_json = [
         {
@@ -65,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
             "model": args.model,
             "train": [Path(p).name for p in args.train],
             "seed": args.seed,
-            "epochs": args.epochs or 60,
+            "epochs": args.epochs or DEFAULT_EPOCHS[args.model],
             "fit_seconds": trained.fit_seconds,
             "tests": tests_json,
         }
@@ -98,7 +100,7 @@ def _run_correction(args: argparse.Namespace) -> int:
     if not args.bundle:
         raise DataError("--model correction needs --bundle DIR: the bundle whose feedforward it corrects")
     records = [load_measurement(path) for path in args.train]
-    result = train_correction_into(args.bundle, records, seed=args.seed, epochs=args.epochs or 300, quiet=args.json)
+    result = train_correction_into(args.bundle, records, seed=args.seed, epochs=args.epochs or DEFAULT_EPOCHS['correction'], quiet=args.json)
     if args.save:
         result.curve.save_png(Path(args.save) / "training_curve.png", "correction training")
     if args.json:

@@ -181,8 +181,7 @@ def train_lstm_narmax(
             loss.backward()
             optimiser.step()
             losses.append(float(loss.detach()))
-        current = weights()
-        score = tail_rmse(current)
+        score = tail_rmse(weights())
         curve.add("teacher forcing", epoch, float(np.mean(losses)), score)
         stopper.update(score, snapshot())
 
