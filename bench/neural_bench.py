@@ -46,20 +46,36 @@ def joined(folder: Path) -> Measurement:
     dt = logs[0].dt
     u = np.concatenate([np.interp(np.arange(0, m.t[-1] - m.t[0], dt) + m.t[0], m.t, m.u) for m in logs])
     y = np.concatenate([np.interp(np.arange(0, m.t[-1] - m.t[0], dt) + m.t[0], m.t, m.y) for m in logs])
-    return Measurement(np.arange(u.size) * dt, u, y, source=f"{folder.name}")
+    return Measurement((np.arange(u.size) * dt).astype(np.float64), u.astype(np.float64), y.astype(np.float64), source=folder.name)
 
 
 def hil(seed: int, scratch: Path) -> Measurement:
     out = scratch / f"rate_seed{seed}.csv"
     subprocess.run(
-        ["pmactl", "hil", "record", "--scenario", "sines", "--effect", "rate_dependence", "--seed", str(seed),
-         "--duration", "120", "--out", str(out)],
-        check=True, capture_output=True,
+        [
+            "pmactl",
+            "hil",
+            "record",
+            "--scenario",
+            "sines",
+            "--effect",
+            "rate_dependence",
+            "--seed",
+            str(seed),
+            "--duration",
+            "120",
+            "--out",
+            str(out),
+        ],
+        check=True,
+        capture_output=True,
     )
     return load_measurement(out)
 
 
-def table_rows(train: Measurement, tests: list[Measurement], epochs: int) -> list[tuple[str, float, float, float, float, float]]:
+def table_rows(
+    train: Measurement, tests: list[Measurement], epochs: int
+) -> list[tuple[str, float, float, float, float, float]]:
     """(model, RMSE, MAXE %, MAE, ms per run, train s) averaged over ``tests``."""
     rows = []
     for name in RATE_MODELS:
@@ -99,12 +115,20 @@ def print_table(title: str, rows: list[tuple[str, float, float, float, float, fl
 
 
 def tables(data: Path, epochs: int, scratch: Path) -> None:
-    print_table("HIL rate_dependence, sines 0.05-1 Hz, train seed 1, test seed 2", table_rows(hil(1, scratch), [hil(2, scratch)], epochs), "mm")
+    print_table(
+        "HIL rate_dependence, sines 0.05-1 Hz, train seed 1, test seed 2",
+        table_rows(hil(1, scratch), [hil(2, scratch)], epochs),
+        "mm",
+    )
     muscle = data / "pam_muscle_sensory" / "2026-07-22_Literature_Comparison"
     if muscle.is_dir():
         record = joined(muscle)
         cut = int(0.7 * len(record))
-        print_table("real muscle 2026-07-22, first 70 % train, last 30 % test", table_rows(record.slice(0, cut), [record.slice(cut)], epochs), "mm")
+        print_table(
+            "real muscle 2026-07-22, first 70 % train, last 30 % test",
+            table_rows(record.slice(0, cut), [record.slice(cut)], epochs),
+            "mm",
+        )
     piezo = data / "piezo_dspace"
     if piezo.is_dir():
         train = load_measurement(piezo / "20_hz_no_lp.csv")
@@ -140,8 +164,61 @@ def latency(scratch: Path, steps: int = 20_000, rounds: int = 3) -> None:
             np_t.append((time.perf_counter() - w, time.process_time() - c))
         diff = float(np.max(np.abs(y_ort - y_np)) / np.ptp(y_ort))
         med = lambda ts, i: 1e6 * statistics.median(t[i] for t in ts) / u.size  # noqa: E731
-        print(f"| {kind} | {med(ort_t, 0):.2f} | {med(ort_t, 1):.2f} | {med(np_t, 0):.2f} | {med(np_t, 1):.2f} | {diff:.1e} |")
+        print(
+            f"| {kind} | {med(ort_t, 0):.2f} | {med(ort_t, 1):.2f} | {med(np_t, 0):.2f} | {med(np_t, 1):.2f} "
+            f"| {diff:.1e} |"
+        )
     print("\n(onnxruntime times include copying the state outputs to the inputs each step, as the edge does)")
+    correction_latency(scratch)
+
+
+def correction_latency(scratch: Path, steps: int = 20_000, rounds: int = 3) -> None:
+    """The edge's correction MLP (3-16-16-1): the edge's own NeuralCorrection vs a numpy twin."""
+    import torch
+
+    from edge.control.neural import NeuralCorrection
+    from host.train.correction import train_correction
+
+    rng = np.random.default_rng(0)
+    features = np.column_stack([rng.uniform(0, 70, 4000), rng.normal(0, 50, 4000), rng.uniform(0, 6, 4000)])
+    target = 0.01 * features[:, 1] + 0.1 * np.sin(features[:, 0] / 10)
+    model, *_ = train_correction(features, target, epochs=50)
+    from models_export.onnx_step import export_module
+
+    path = export_module(model, (torch.zeros(1, 3),), scratch / "corr.onnx", ["features"], ["correction_bar"])
+    spec = {
+        "features": ["reference_mm", "reference_rate_mm_s", "feedforward_bar"],
+        "input": "features",
+        "output": "correction_bar",
+    }
+    edge = NeuralCorrection(path, spec)
+    state = model.state_dict()
+    layers = [(state[f"net.{i}.weight"].numpy(), state[f"net.{i}.bias"].numpy()) for i in (0, 2, 4)]
+    mean, inv_std, scale = (state[k].numpy() for k in ("mean", "inv_std", "scale"))
+
+    def numpy_step(values: tuple[float, ...]) -> float:
+        x = (np.array(values[:3], np.float32) - mean[0]) * inv_std[0]
+        for i, (w, b) in enumerate(layers):
+            x = w @ x + b
+            if i < 2:
+                x = np.tanh(x)
+        return float(x[0] * scale)
+
+    rows = [(r[0], r[1], r[2], 0.0, 0.0, 0.0) for r in features[np.arange(steps) % len(features)].tolist()]
+    ort_t, np_t, diff = [], [], 0.0
+    for _ in range(rounds):
+        w, c = time.perf_counter(), time.process_time()
+        a = [edge.step(r) for r in rows]
+        ort_t.append((time.perf_counter() - w, time.process_time() - c))
+        w, c = time.perf_counter(), time.process_time()
+        b = [numpy_step(r) for r in rows]
+        np_t.append((time.perf_counter() - w, time.process_time() - c))
+        diff = max(diff, float(np.max(np.abs(np.array(a) - np.array(b)))))
+    med = lambda ts, i: 1e6 * statistics.median(t[i] for t in ts) / steps  # noqa: E731
+    print(
+        f"| correction MLP 3-16-16-1 (edge NeuralCorrection) | {med(ort_t, 0):.2f} | {med(ort_t, 1):.2f} | "
+        f"{med(np_t, 0):.2f} | {med(np_t, 1):.2f} | {diff / max(1e-12, float(np.ptp(a))):.1e} |"
+    )
 
 
 def _hammerstein_numpy_steps(w, u: np.ndarray, n: np.ndarray) -> np.ndarray:  # noqa: ANN001
@@ -159,7 +236,7 @@ def _hammerstein_numpy_steps(w, u: np.ndarray, n: np.ndarray) -> np.ndarray:  # 
             h = weight @ h + bias
             if i < len(layers) - 1:
                 h = np.tanh(h)
-        v = np.float32(h[0] * w.y_std + w.y_mean)
+        v = np.float32(n[k] + h[0] * w.y_std)
         y = np.float32(a @ y_lags + b[0] * v + b[1:] @ v_lags)
         y_lags[1:] = y_lags[:2]
         y_lags[0] = y
@@ -176,28 +253,50 @@ def closed_loop(scratch: Path) -> None:
     config = str(HERE.parent / "docs" / "examples" / "hil-rig.toml")
     bundle = scratch / "loop_bundle"
     subprocess.run(
-        ["pmactl", "fit", "--model", "preisach", "--train", str(HERE.parent / "host" / "example_data" / "pma_triangles.csv"),
-         "--units", "bar,mm", "--save", str(bundle)],
-        check=True, capture_output=True,
+        [
+            "pmactl",
+            "fit",
+            "--model",
+            "preisach",
+            "--train",
+            str(HERE.parent / "host" / "example_data" / "pma_triangles.csv"),
+            "--units",
+            "bar,mm",
+            "--save",
+            str(bundle),
+        ],
+        check=True,
+        capture_output=True,
     )
     result = correction_bundle(bundle)
-    print(f"\n**Closed loop on the HIL** (correction: tail RMSE {result.tail_rmse_bar:.4f} bar, "
-          f"feedforward alone {result.tail_rmse_ff_bar:.4f} bar)\n")
+    print(
+        f"\n**Closed loop on the HIL** (correction: tail RMSE {result.tail_rmse_bar:.4f} bar, "
+        f"feedforward alone {result.tail_rmse_ff_bar:.4f} bar)\n"
+    )
     print("| reference | PID RMS [mm] | + feedforward | + correction | ratio ff / PID | ratio ff+corr / PID |")
     print("|---|---:|---:|---:|---:|---:|")
     references = {
         "seed 000 sine 30 sin(2 pi 0.2 t) + 40": ["--duration", "25", "--settle", "5"],
-        "seed 002 amplitude ramp": ["--reference", "ramp-sine:peak=30,frequency=1,offset=40,rise=10,hold=1", "--settle", "1"],
+        "seed 002 amplitude ramp": [
+            "--reference",
+            "ramp-sine:peak=30,frequency=1,offset=40,rise=10,hold=1",
+            "--settle",
+            "1",
+        ],
     }
     for name, extra in references.items():
         rms = []
         for flags in (["--no-feedforward", "--no-correction"], ["--no-correction"], []):
             out = subprocess.run(
                 ["pmactl", "edge", "run", "--config", config, "--bundle", str(bundle), *extra, *flags, "--json"],
-                check=True, capture_output=True, text=True,
+                check=True,
+                capture_output=True,
+                text=True,
             ).stdout
             rms.append(float(json.loads(out)["rms_error"]))
-        print(f"| {name} | {rms[0]:.3f} | {rms[1]:.3f} | {rms[2]:.3f} | {rms[1] / rms[0]:.2f} | {rms[2] / rms[0]:.2f} |")
+        print(
+            f"| {name} | {rms[0]:.3f} | {rms[1]:.3f} | {rms[2]:.3f} | {rms[1] / rms[0]:.2f} | {rms[2] / rms[0]:.2f} |"
+        )
 
 
 def main() -> int:

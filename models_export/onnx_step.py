@@ -68,7 +68,9 @@ NARMAX_SPEC = StepSpec(
         StateSpec("c", "c_out", 7),
     ),
 )
-HAMMERSTEIN_SPEC = StepSpec(("u", "n"), "y", (StateSpec("y_lags", "y_lags_out", 3), StateSpec("v_lags", "v_lags_out", 2)))
+HAMMERSTEIN_SPEC = StepSpec(
+    ("u", "n"), "y", (StateSpec("y_lags", "y_lags_out", 3), StateSpec("v_lags", "v_lags_out", 2))
+)
 
 
 def _narmax_module(w: NarmaxWeights):  # noqa: ANN202 (torch is imported lazily)
@@ -89,8 +91,8 @@ def _narmax_module(w: NarmaxWeights):  # noqa: ANN202 (torch is imported lazily)
                 self.cell.bias_hh.zero_()
                 self.head.weight.copy_(torch.from_numpy(w.head_w[None, :] * np.float32(w.y_std)))
                 self.head.bias.fill_(float(np.float32(w.head_b) * np.float32(w.y_std)))
-            self.register_buffer("mean", torch.from_numpy(w.mean[None, :]))
-            self.register_buffer("inv_std", torch.from_numpy((1.0 / w.std).astype(np.float32)[None, :]))
+            self.mean = torch.from_numpy(w.mean[None, :])
+            self.inv_std = torch.from_numpy((1.0 / w.std).astype(np.float32)[None, :])
 
         def forward(self, u, n, u_lag, n_lag, y_lag, h, c):  # noqa: ANN001, ANN202
             x = (torch.cat([u, u_lag, n, n_lag, y_lag], dim=1) - self.mean) * self.inv_std
@@ -117,11 +119,9 @@ def _hammerstein_module(w: HammersteinWeights):  # noqa: ANN202
                 linears.append(layer)
             self.layers = nn.ModuleList(linears)
             f32 = lambda a: torch.tensor(np.asarray(a, np.float32))  # noqa: E731
-            self.register_buffer("mean", f32(w.mean[None, :]))
-            self.register_buffer("std", f32(w.std[None, :]))
-            self.register_buffer("y_scale", f32([w.y_std, w.y_mean]))
-            self.register_buffer("a", f32(w.a[:, None]))
-            self.register_buffer("b", f32(w.b[:, None]))
+            self.mean, self.std = f32(w.mean[None, :]), f32(w.std[None, :])
+            self.y_std = f32(w.y_std)
+            self.a, self.b = f32(w.a[:, None]), f32(w.b[:, None])
 
         def forward(self, u, n, y_lags, v_lags):  # noqa: ANN001, ANN202
             x = (torch.cat([u, n], dim=1) - self.mean) / self.std
@@ -129,7 +129,7 @@ def _hammerstein_module(w: HammersteinWeights):  # noqa: ANN202
                 x = layer(x)
                 if i < len(self.layers) - 1:
                     x = torch.tanh(x)
-            v = n + x * self.y_scale[0]
+            v = n + x * self.y_std
             vs = torch.cat([v, v_lags], dim=1)
             y = y_lags @ self.a + vs @ self.b
             return y, torch.cat([y, y_lags[:, :2]], dim=1), torch.cat([v, v_lags[:, :1]], dim=1)
@@ -148,7 +148,9 @@ def spec_of(kind: str) -> StepSpec:
     return NARMAX_SPEC if kind == "lstm-narmax" else HAMMERSTEIN_SPEC
 
 
-def export_module(module: object, example: tuple[object, ...], path: str | Path, inputs: list[str], outputs: list[str]) -> Path:
+def export_module(
+    module: object, example: tuple[object, ...], path: str | Path, inputs: list[str], outputs: list[str]
+) -> Path:
     """Trace ``module`` at batch 1 and write an opset-18 ONNX graph with static shapes."""
     import onnx
     import torch
@@ -177,7 +179,9 @@ def export_step(kind: str, weights: object, path: str | Path) -> tuple[Path, Ste
     spec = spec_of(kind)
     example = tuple(torch.zeros(1, 1) for _ in spec.inputs) + tuple(torch.zeros(1, s.size) for s in spec.state)
     outputs = [spec.output] + [s.output for s in spec.state]
-    return export_module(step_module(kind, weights), example, path, [*spec.inputs, *(s.input for s in spec.state)], outputs), spec
+    return export_module(
+        step_module(kind, weights), example, path, [*spec.inputs, *(s.input for s in spec.state)], outputs
+    ), spec
 
 
 def session(path: str | Path):  # noqa: ANN201
@@ -228,12 +232,18 @@ class OnnxStepper:
 def initial_state(kind: str, weights: object, u0: float, n0: float) -> dict[str, NDArray[np.float32]]:
     """The start every evaluator uses: zero LSTM state, lags at the first sample (steady state)."""
     if kind == "lstm-narmax":
-        return {"u_lag": np.full((1, 1), u0, np.float32), "n_lag": np.full((1, 1), n0, np.float32), "y_lag": np.full((1, 1), n0, np.float32)}
+        return {
+            "u_lag": np.full((1, 1), u0, np.float32),
+            "n_lag": np.full((1, 1), n0, np.float32),
+            "y_lag": np.full((1, 1), n0, np.float32),
+        }
     v0 = float(weights.static(np.array([u0]), np.array([n0]))[0])  # type: ignore[attr-defined]
     return {"y_lags": np.full((1, 3), v0, np.float32), "v_lags": np.full((1, 2), v0, np.float32)}
 
 
-def simulate_onnx(path: str | Path, kind: str, weights: object, u: NDArray[np.float64], n: NDArray[np.float64]) -> NDArray[np.float64]:
+def simulate_onnx(
+    path: str | Path, kind: str, weights: object, u: NDArray[np.float64], n: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """Free run of the exported graph over a record (onnxruntime)."""
     stepper = OnnxStepper(path, spec_of(kind))
     stepper.set_state(initial_state(kind, weights, float(u[0]), float(n[0])))
@@ -251,6 +261,8 @@ def simulate_torch(kind: str, weights: object, u: NDArray[np.float64], n: NDArra
     out = np.empty(u.size)
     with torch.no_grad():
         for k in range(u.size):
-            y, *state = module(torch.tensor([[u[k]]], dtype=torch.float32), torch.tensor([[n[k]]], dtype=torch.float32), *state)
+            y, *state = module(
+                torch.tensor([[u[k]]], dtype=torch.float32), torch.tensor([[n[k]]], dtype=torch.float32), *state
+            )
             out[k] = float(y[0, 0])
     return out

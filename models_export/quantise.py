@@ -47,7 +47,9 @@ def _outputs(path: Path, input_name: str, features: NDArray[np.float32]) -> NDAr
     return np.array([float(sess.run([output], {input_name: row[None, :]})[0][0, 0]) for row in features])
 
 
-def step_latency(path: Path, input_name: str, output_name: str, features: NDArray[np.float32], steps: int) -> tuple[float, float]:
+def step_latency(
+    path: Path, input_name: str, output_name: str, features: NDArray[np.float32], steps: int
+) -> tuple[float, float]:
     """(wall, CPU) microseconds per step of a bound session over ``steps`` steps."""
     import onnxruntime as ort
 
@@ -68,7 +70,13 @@ def step_latency(path: Path, input_name: str, output_name: str, features: NDArra
 
 
 def _variants(source: Path, scratch: Path, input_name: str, calibration: NDArray[np.float32]) -> dict[str, Path]:
-    from onnxruntime.quantization import CalibrationDataReader, QuantFormat, QuantType, quantize_dynamic, quantize_static
+    from onnxruntime.quantization import (
+        CalibrationDataReader,
+        QuantFormat,
+        QuantType,
+        quantize_dynamic,
+        quantize_static,
+    )
 
     class Reader(CalibrationDataReader):
         def __init__(self) -> None:
@@ -90,7 +98,12 @@ def _variants(source: Path, scratch: Path, input_name: str, calibration: NDArray
 
 
 def quantise_bundle(
-    bundle_dir: str | Path, features: NDArray[np.float64], target: NDArray[np.float64], *, steps: int = 20_000, rounds: int = 3
+    bundle_dir: str | Path,
+    features: NDArray[np.float64],
+    target: NDArray[np.float64],
+    *,
+    steps: int = 20_000,
+    rounds: int = 3,
 ) -> dict[str, object]:
     """Measure the variants on ``(features, target)``, apply the rule, record it (module docstring)."""
     bundle = Path(bundle_dir)
@@ -131,13 +144,26 @@ def quantise_bundle(
                 continue
             accurate = m["rmse_ratio"] <= 1.0 + RMSE_TOLERANCE
             faster = m["us_per_step_wall"] < base["us_per_step_wall"]
-            if accurate and faster and (kept == "float32" or m["us_per_step_wall"] < measured[kept]["us_per_step_wall"]):
+            if (
+                accurate
+                and faster
+                and (kept == "float32" or m["us_per_step_wall"] < measured[kept]["us_per_step_wall"])
+            ):
                 kept = name
             if not (accurate and faster):
-                failed = [t for t, ok in (("accuracy: RMSE > 1.05x float32", accurate), ("speed: not faster per step", faster)) if not ok]
+                failed = [
+                    t
+                    for t, ok in (("accuracy: RMSE > 1.05x float32", accurate), ("speed: not faster per step", faster))
+                    if not ok
+                ]
                 reasons.append(f"{name} failed {' and '.join(failed)}")
         reason = "; ".join(reasons) if kept == "float32" else f"{kept} is within 5 % of float32 and faster"
-        record = {"kept": kept, "reason": reason, "variants": measured, "rule": "int8 only if RMSE <= 1.05x float32 and faster per step"}
+        record: dict[str, object] = {
+            "kept": kept,
+            "reason": reason,
+            "variants": measured,
+            "rule": "int8 only if RMSE <= 1.05x float32 and faster per step",
+        }
         new_spec = {k: v for k, v in spec.items() if k != "file"}
         new_spec["quantisation"] = record
         add_correction(bundle, paths[kept], new_spec)

@@ -27,7 +27,9 @@ def test_the_graph_has_static_batch_1_shapes_and_explicit_state(exported):
     kind, _, path, spec, _ = exported
     graph = onnx.load(str(path))
     assert max(o.version for o in graph.opset_import if o.domain in ("", "ai.onnx")) >= 18
-    shapes = {v.name: [d.dim_value for d in v.type.tensor_type.shape.dim] for v in [*graph.graph.input, *graph.graph.output]}
+    shapes = {
+        v.name: [d.dim_value for d in v.type.tensor_type.shape.dim] for v in [*graph.graph.input, *graph.graph.output]
+    }
     assert all(all(d > 0 for d in shape) and shape[0] == 1 for shape in shapes.values())
     for state in spec.state:
         assert shapes[state.input] == shapes[state.output] == [1, state.size]

@@ -16,8 +16,22 @@ from tests.neural_data import hil_csv
 def corrected(tmp_path_factory):
     root = tmp_path_factory.mktemp("corr")
     bundle = root / "bundle"
-    assert main(["fit", "--model", "preisach", "--train", str(hil_csv(root, "triangles", 5, 80.0)),
-                 "--units", "bar,mm", "--save", str(bundle)]) == 0
+    assert (
+        main(
+            [
+                "fit",
+                "--model",
+                "preisach",
+                "--train",
+                str(hil_csv(root, "triangles", 5, 80.0)),
+                "--units",
+                "bar,mm",
+                "--save",
+                str(bundle),
+            ]
+        )
+        == 0
+    )
     return root, bundle
 
 
@@ -47,8 +61,11 @@ def test_quantise_records_both_measurements_and_applies_the_rule(corrected, caps
     assert set(variants) == {"float32", "dynamic_int8", "dynamic_int8_reduce_range", "static_qdq"}
     base = variants["float32"]
     allowed = [
-        name for name, m in variants.items()
-        if name != "float32" and m["rmse_bar"] <= 1.05 * base["rmse_bar"] and m["us_per_step_wall"] < base["us_per_step_wall"]
+        name
+        for name, m in variants.items()
+        if name != "float32"
+        and m["rmse_bar"] <= 1.05 * base["rmse_bar"]
+        and m["us_per_step_wall"] < base["us_per_step_wall"]
     ]
     assert report["kept"] in (allowed or ["float32"])
     loaded = load_bundle(bundle)  # checksums still verify
@@ -57,6 +74,9 @@ def test_quantise_records_both_measurements_and_applies_the_rule(corrected, caps
 
 def test_quantise_without_a_correction_is_one_clear_error(tmp_path, capsys):
     bundle = tmp_path / "b"
-    assert main(["fit", "--model", "pi", "--train", str(hil_csv(tmp_path, "triangles", 8, 40.0)), "--save", str(bundle)]) == 0
+    assert (
+        main(["fit", "--model", "pi", "--train", str(hil_csv(tmp_path, "triangles", 8, 40.0)), "--save", str(bundle)])
+        == 0
+    )
     assert main(["quantise", str(bundle), "--calibration", str(hil_csv(tmp_path, "sines", 9, 20.0))]) == 2
     assert "no correction to quantise" in capsys.readouterr().err

@@ -53,8 +53,20 @@ def test_data_too_short_to_train_on_is_one_clear_error(rate_records):
 def test_the_cli_prints_fits_json_plus_mae_and_time_per_run(rate_records, tmp_path, capsys):
     train, test = rate_records
     code = main(
-        ["train", "--model", "hammerstein", "--train", str(train), "--test", str(test), "--epochs", "3",
-         "--json", "--save", str(tmp_path / "ham")]
+        [
+            "train",
+            "--model",
+            "hammerstein",
+            "--train",
+            str(train),
+            "--test",
+            str(test),
+            "--epochs",
+            "3",
+            "--json",
+            "--save",
+            str(tmp_path / "ham"),
+        ]
     )
     assert code == 0
     record = json.loads(capsys.readouterr().out)

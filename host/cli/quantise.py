@@ -6,7 +6,7 @@ import argparse
 import json
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
     """Add ``pmactl quantise`` to the command line."""
     from host.cli import _lazy
 
@@ -15,7 +15,11 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     )
     quantise.add_argument("bundle", metavar="DIR", help="bundle with a correction (pmactl train --model correction)")
     quantise.add_argument(
-        "--calibration", required=True, action="append", metavar="CSV", help="recording (t,u,y) for calibration and scoring"
+        "--calibration",
+        required=True,
+        action="append",
+        metavar="CSV",
+        help="recording (t,u,y) for calibration and scoring",
     )
     quantise.add_argument("--json", action="store_true", help="print one JSON object")
     quantise.set_defaults(run=_lazy("host.cli.quantise"))
@@ -36,7 +40,8 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(report))
         return 0
     print(f"{'variant':<26} {'RMSE [bar]':>11} {'vs f32':>8} {'us/step':>8} {'cpu us/step':>11}")
-    for name, m in report["variants"].items():
+    variants: dict[str, dict[str, float]] = report["variants"]  # type: ignore[assignment]
+    for name, m in variants.items():
         print(
             f"{name:<26} {m['rmse_bar']:>11.5f} {m['rmse_ratio']:>8.3f} {m['us_per_step_wall']:>8.2f} "
             f"{m['us_per_step_cpu']:>11.2f}"

@@ -13,7 +13,7 @@ from host.data import load_measurement
 DEFAULT_EPOCHS = {"hammerstein": 60, "lstm-narmax": 150, "correction": 300}
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
     """Add ``pmactl train`` to the command line."""
     from host.cli import _lazy
 
@@ -24,7 +24,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     )
     train.add_argument("--test", action="append", default=[], metavar="CSV", help="held-out recording (repeatable)")
     train.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same model")
-    train.add_argument("--epochs", type=int, help="training epochs (default: hammerstein 60, lstm-narmax 150, correction 300)")
+    train.add_argument(
+        "--epochs", type=int, help="training epochs (default: hammerstein 60, lstm-narmax 150, correction 300)"
+    )
     train.add_argument(
         "--calibration",
         type=float,
@@ -49,7 +51,9 @@ def run(args: argparse.Namespace) -> int:
 
     records = [load_measurement(path) for path in args.train]
     tests = [load_measurement(path) for path in args.test]
-    trained = train_model(args.model, records, seed=args.seed, epochs=args.epochs or DEFAULT_EPOCHS[args.model], quiet=args.json)
+    trained = train_model(
+        args.model, records, seed=args.seed, epochs=args.epochs or DEFAULT_EPOCHS[args.model], quiet=args.json
+    )
     results = score_model(trained.model, tests, args.calibration)
     tests_json = [
         {
@@ -90,7 +94,9 @@ def run(args: argparse.Namespace) -> int:
     else:
         print("no --test given: pass held-out recordings with --test to score the model")
     if args.save:
-        print(f"model written to {args.save} (step.onnx, model.json, operator.npz, training_curve.png)", file=sys.stdout)
+        print(
+            f"model written to {args.save} (step.onnx, model.json, operator.npz, training_curve.png)", file=sys.stdout
+        )
     return 0
 
 
@@ -100,7 +106,9 @@ def _run_correction(args: argparse.Namespace) -> int:
     if not args.bundle:
         raise DataError("--model correction needs --bundle DIR: the bundle whose feedforward it corrects")
     records = [load_measurement(path) for path in args.train]
-    result = train_correction_into(args.bundle, records, seed=args.seed, epochs=args.epochs or DEFAULT_EPOCHS['correction'], quiet=args.json)
+    result = train_correction_into(
+        args.bundle, records, seed=args.seed, epochs=args.epochs or DEFAULT_EPOCHS["correction"], quiet=args.json
+    )
     if args.save:
         result.curve.save_png(Path(args.save) / "training_curve.png", "correction training")
     if args.json:

@@ -39,7 +39,9 @@ def join(records: list[Measurement]) -> Measurement:
         u.append(m.u)
         y.append(m.y)
         offset = float(t[-1][-1]) + m.dt
-    return Measurement(np.concatenate(t), np.concatenate(u), np.concatenate(y), source=" + ".join(m.source for m in records))
+    return Measurement(
+        np.concatenate(t), np.concatenate(u), np.concatenate(y), source=" + ".join(m.source for m in records)
+    )
 
 
 @dataclass

@@ -154,7 +154,9 @@ def train_correction_into(
     model, curve, tail_rmse, n_train = train_correction(features, target, seed=seed, epochs=epochs, quiet=quiet)
     fit_seconds = time.perf_counter() - start
     with tempfile.TemporaryDirectory() as scratch:
-        path = export_module(model, (torch.zeros(1, len(FEATURES)),), Path(scratch) / "correction.onnx", ["features"], ["correction_bar"])
+        path = export_module(
+            model, (torch.zeros(1, len(FEATURES)),), Path(scratch) / "correction.onnx", ["features"], ["correction_bar"]
+        )
         spec: dict[str, object] = {
             "features": list(FEATURES),
             "input": "features",
@@ -208,10 +210,14 @@ def working_range_recording(seed: int = 11, duration_s: float = 140.0, rate_hz: 
             y_out.append(output(t, x, params)[0])
         x = update(t, x, command, params)
     y = np.asarray(y_out) + rng.normal(0.0, 0.03, len(y_out))
-    return Measurement(np.asarray(t_out), np.asarray(u_out), y, source=f"emulated rig, working-range sines, seed {seed}")
+    return Measurement(
+        np.asarray(t_out), np.asarray(u_out), y, source=f"emulated rig, working-range sines, seed {seed}"
+    )
 
 
-def correction_bundle(bundle_dir: str | Path, recording: Measurement | None = None, *, seed: int = 0) -> CorrectionResult:
+def correction_bundle(
+    bundle_dir: str | Path, recording: Measurement | None = None, *, seed: int = 0
+) -> CorrectionResult:
     """Equip the bundle at ``bundle_dir`` with a trained correction (for ``pmactl demo``).
 
     Without ``recording``, the emulated rig is driven over its working range

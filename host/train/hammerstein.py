@@ -4,17 +4,19 @@
 * The BP net (tanh, 2-5-10-1 as in seed 000 Fig 7) maps the extended input ``[u, y_MPI]`` to
   what the operator gets wrong: ``v = y_MPI + net(u, y_MPI)``. Its last layer starts at zero,
   so training starts from the MPI model and early stopping can only keep an improvement (from
-  random weights the net never got back to the operator's own held-out error on the HIL). It is trained with **L-BFGS** on
-  the whole training part at once: 81 weights and a smooth full-batch loss are where a
-  quasi-Newton method converges in tens of iterations, deterministically and without a learning
-  rate to tune (seed 000's BP gradient descent reaches the same minimum far more slowly).
-  Early stopping: every epoch (5 L-BFGS iterations) scores the held-out tail.
+  random weights the net never got back to the operator's own held-out error on the HIL).
+  It is trained with **L-BFGS** on the whole training part at once: 81 weights and a smooth
+  full-batch loss are where a quasi-Newton method converges in tens of iterations,
+  deterministically and without a learning rate to tune (seed 000's BP gradient descent
+  reaches the same minimum far more slowly). Early stopping: every epoch (5 L-BFGS
+  iterations) scores the held-out tail.
 * The ARX part (seed 000 eqs 9-11) gives the dynamics:
-  ``y(k) = sum_{i=1..na} a_i y(k-i) + sum_{j=0..nb-1} b_j v(k-j) + c`` with v the net output.
-  Orders ``na in 0..3``, ``nb in 1..3`` are chosen by AIC (eq 17, ``N ln(sigma^2) + 2 p``) on the
-  *simulation* error, with unit static gain and ``c = 0`` (the net carries the statics) (the model is used in free run; equation error at 100 Hz+ rewards
-  ``a_1 -> 1`` and says nothing about free run). Coefficients by least squares on the
-  simulation error, started from the equation-error solution; unstable candidates are refused.
+  ``y(k) = sum_{i=1..na} a_i y(k-i) + sum_{j=0..nb-1} b_j v(k-j)`` with v the net output, unit
+  static gain and no offset (the net carries the statics). Orders ``na in 0..3``, ``nb in 1..3``
+  are chosen by AIC (eq 17, ``N ln(sigma^2) + 2 p``) on the *simulation* error: the model is
+  used in free run, and the equation error at 100 Hz and more rewards ``a_1 -> 1`` and says
+  nothing about free run. Coefficients by least squares on the simulation error; unstable
+  candidates are refused.
 
 The step (exported to ONNX) carries ``y_lags`` (3) and ``v_lags`` (2); unused orders have zero
 coefficients, so the graph's shapes do not depend on the chosen orders.
@@ -61,7 +63,9 @@ class HammersteinWeights:
         return (n.astype(np.float32) + x[:, 0] * np.float32(self.y_std)).astype(np.float64)
 
 
-def arx_simulate(a: NDArray[np.float64], b: NDArray[np.float64], c: float, v: NDArray[np.float64]) -> NDArray[np.float64]:
+def arx_simulate(
+    a: NDArray[np.float64], b: NDArray[np.float64], c: float, v: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """Free-run ARX output, started at the steady state of ``v[0]``."""
     den = np.concatenate([[1.0], -a])
     gain = float(np.sum(b)) / float(np.sum(den))
@@ -175,10 +179,15 @@ def train_hammerstein(
         loss.backward()
         return loss
 
-    def weights(a: NDArray[np.float64], b: NDArray[np.float64], c: float, orders: tuple[int, int]) -> HammersteinWeights:
+    def weights(
+        a: NDArray[np.float64], b: NDArray[np.float64], c: float, orders: tuple[int, int]
+    ) -> HammersteinWeights:
         linears = [m for m in net if isinstance(m, nn.Linear)]
         return HammersteinWeights(
-            [(m.weight.detach().numpy().astype(np.float32).copy(), m.bias.detach().numpy().astype(np.float32).copy()) for m in linears],
+            [
+                (m.weight.detach().numpy().astype(np.float32).copy(), m.bias.detach().numpy().astype(np.float32).copy())
+                for m in linears
+            ],
             mean.astype(np.float32),
             std.astype(np.float32),
             float(y_mean),
@@ -189,16 +198,16 @@ def train_hammerstein(
             orders,
         )
 
-    identity = (np.zeros(MAX_NA), np.array([1.0, 0.0, 0.0]), 0.0, (0, 1))
+    no_a, unit_b = np.zeros(MAX_NA), np.array([1.0, 0.0, 0.0])  # the static net alone
     for epoch in progress(epochs, "hammerstein BP net (L-BFGS)", quiet):
-        loss = float(optimiser.step(closure).detach())  # type: ignore[arg-type]
-        static = weights(*identity).static(u_all[n_train:], n_all[n_train:])
+        loss = float(optimiser.step(closure).detach())
+        static = weights(no_a, unit_b, 0.0, (0, 1)).static(u_all[n_train:], n_all[n_train:])
         score = float(np.sqrt(np.mean((static - y_all[n_train:]) ** 2)))
         curve.add("BP net (L-BFGS)", epoch, loss, score)
         if stopper.update(score, {"net": net.state_dict()}):
             break
     if stopper.best_state is not None:
         net.load_state_dict(stopper.best_state["net"])  # type: ignore[arg-type]
-    v = weights(*identity).static(u_all[:n_train], n_all[:n_train])
-    a, b, c, orders, aic = fit_arx(v, y_all[:n_train])
-    return Hammerstein(operator, weights(a, b, c, orders), aic, curve), split
+    v = weights(no_a, unit_b, 0.0, (0, 1)).static(u_all[:n_train], n_all[:n_train])
+    arx_a, arx_b, arx_c, orders, aic = fit_arx(v, y_all[:n_train])
+    return Hammerstein(operator, weights(arx_a, arx_b, arx_c, orders), aic, curve), split

@@ -66,7 +66,7 @@ class LSTMNarmax:
 
 
 def _sigmoid(x: NDArray[np.float32]) -> NDArray[np.float32]:
-    return 1.0 / (1.0 + np.exp(-x))  # type: ignore[no-any-return]
+    return np.asarray(1.0 / (1.0 + np.exp(-x)), dtype=np.float32)
 
 
 def simulate_numpy(w: NarmaxWeights, u: NDArray[np.float64], n: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -85,7 +85,12 @@ def simulate_numpy(w: NarmaxWeights, u: NDArray[np.float64], n: NDArray[np.float
     for k in range(u.size):
         x[0], x[1], x[2], x[3], x[4] = u32[k], u_lag, n32[k], n_lag, y_lag
         z = w.w_ih @ ((x - w.mean) * inv_std) + w.w_hh @ h + w.bias
-        i, f, g, o = _sigmoid(z[:hidden]), _sigmoid(z[hidden : 2 * hidden]), np.tanh(z[2 * hidden : 3 * hidden]), _sigmoid(z[3 * hidden :])
+        i, f, g, o = (
+            _sigmoid(z[:hidden]),
+            _sigmoid(z[hidden : 2 * hidden]),
+            np.tanh(z[2 * hidden : 3 * hidden]),
+            _sigmoid(z[3 * hidden :]),
+        )
         c = f * c + i * g
         h = o * np.tanh(c)
         y = np.float32(n32[k] + (w.head_w @ h + np.float32(w.head_b)) * np.float32(w.y_std))
@@ -116,8 +121,8 @@ def train_lstm_narmax(
     epochs: int = 60,
     quiet: bool = True,
     teacher_window: int = 256,
-    free_run_window: int = 200,
-    washout: int = 20,
+    free_run_window: int = 400,
+    washout: int = 50,
     patience: int = 8,
 ) -> tuple[LSTMNarmax, Split]:
     """Identify the operator, train the LSTM (see module docstring). ``split_fn(start) -> Split``."""
@@ -149,10 +154,11 @@ def train_lstm_narmax(
     stopper = EarlyStopping(patience)
 
     def weights() -> NarmaxWeights:
+        p = {name: value.detach().numpy().astype(np.float32) for name, value in lstm.named_parameters()}
         return NarmaxWeights(
-            lstm.weight_ih_l0.detach().numpy().astype(np.float32).copy(),
-            lstm.weight_hh_l0.detach().numpy().astype(np.float32).copy(),
-            (lstm.bias_ih_l0 + lstm.bias_hh_l0).detach().numpy().astype(np.float32).copy(),
+            p["weight_ih_l0"].copy(),
+            p["weight_hh_l0"].copy(),
+            p["bias_ih_l0"] + p["bias_hh_l0"],
             head.weight.detach().numpy()[0].astype(np.float32).copy(),
             float(head.bias.detach()[0]),
             mean.astype(np.float32),
@@ -189,7 +195,7 @@ def train_lstm_narmax(
         lstm.load_state_dict(stopper.best_state["lstm"])  # type: ignore[arg-type]
         head.load_state_dict(stopper.best_state["head"])  # type: ignore[arg-type]
     stopper.stale = 0
-    optimiser = torch.optim.Adam(params, lr=3e-3)
+    optimiser = torch.optim.Adam(params, lr=1e-3)
     mean_t, std_t = t(mean), t(std)
     for epoch in progress(epochs - teacher_epochs, "lstm-narmax free run", quiet):
         losses = []

@@ -86,6 +86,11 @@ def identify_tanh_pi(u: NDArray[np.float64], y: NDArray[np.float64], n_operators
             rmse = float(np.sqrt(np.mean((estimator.train_prediction_ - y[estimator.start_index_ :]) ** 2)))
             if best is None or rmse < best[0]:
                 operator = Operator(estimator.model_, "tanh_pi", centre, half_range)
-                best = (rmse, IdentifiedOperator(operator, estimator.start_index_, estimator.start_branch_, estimator.fit_seconds_))
+                best = (
+                    rmse,
+                    IdentifiedOperator(
+                        operator, estimator.start_index_, estimator.start_branch_, estimator.fit_seconds_
+                    ),
+                )
     assert best is not None
     return best[1]
