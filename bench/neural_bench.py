@@ -46,7 +46,9 @@ def joined(folder: Path) -> Measurement:
     dt = logs[0].dt
     u = np.concatenate([np.interp(np.arange(0, m.t[-1] - m.t[0], dt) + m.t[0], m.t, m.u) for m in logs])
     y = np.concatenate([np.interp(np.arange(0, m.t[-1] - m.t[0], dt) + m.t[0], m.t, m.y) for m in logs])
-    return Measurement((np.arange(u.size) * dt).astype(np.float64), u.astype(np.float64), y.astype(np.float64), source=folder.name)
+    return Measurement(
+        (np.arange(u.size) * dt).astype(np.float64), u.astype(np.float64), y.astype(np.float64), source=folder.name
+    )
 
 
 def hil(seed: int, scratch: Path) -> Measurement:
@@ -73,37 +75,41 @@ def hil(seed: int, scratch: Path) -> Measurement:
     return load_measurement(out)
 
 
-def table_rows(
-    train: Measurement, tests: list[Measurement], epochs: int
-) -> list[tuple[str, float, float, float, float, float]]:
-    """(model, RMSE, MAXE %, MAE, ms per run, train s) averaged over ``tests``."""
-    rows = []
+Row = tuple[str, float, float, float, float, float]
+
+
+def _cells(prediction, measured: Measurement, ms: float) -> tuple[float, float, float, float]:  # noqa: ANN001
+    end = prediction.window_end
+    mae = float(np.mean(np.abs(prediction.y[end:] - measured.y[end:])))
+    maxe = 100 * prediction.score.max_error / float(np.ptp(measured.y[end:]))
+    return prediction.score.rmse, maxe, mae, ms
+
+
+def table_rows(train: Measurement, test_sets: dict[str, list[Measurement]], epochs: int) -> dict[str, list[Row]]:
+    """Per test set: (model, RMSE, MAXE %, MAE, ms per run, train s), averaged over its records."""
+    rows: dict[str, list[Row]] = {name: [] for name in test_sets}
     for name in RATE_MODELS:
         start = time.perf_counter()
         model = make_estimator(name).fit(train.u, train.y).model_
         fit_s = time.perf_counter() - start
-        cells = []
-        for m in tests:
-            t0 = time.perf_counter()
-            model.reset(float(m.u[0]), "descending")
-            model.simulate(m.u)
-            ms = 1e3 * (time.perf_counter() - t0)
-            p = predict_unknown_start(model, m.u, m.y)
-            mae = float(np.mean(np.abs(p.y[p.window_end :] - m.y[p.window_end :])))
-            maxe = 100 * p.score.max_error / float(np.ptp(m.y[p.window_end :]))
-            cells.append((p.score.rmse, maxe, mae, ms))
-        rows.append((name, *np.mean(cells, axis=0), fit_s))
+        for set_name, tests in test_sets.items():
+            cells = []
+            for m in tests:
+                t0 = time.perf_counter()
+                model.reset(float(m.u[0]), "descending")
+                model.simulate(m.u)
+                ms = 1e3 * (time.perf_counter() - t0)
+                cells.append(_cells(predict_unknown_start(model, m.u, m.y), m, ms))
+            rows[set_name].append((name, *np.mean(cells, axis=0), fit_s))
     for kind in ("hammerstein", "lstm-narmax"):
         trained = train_model(kind, [train], epochs=epochs if kind == "lstm-narmax" else 60)
-        cells = []
-        for r, m in zip(score_model(trained.model, tests), tests):
-            maxe = 100 * r.prediction.score.max_error / float(np.ptp(m.y[r.prediction.window_end :]))
-            cells.append((r.prediction.score.rmse, maxe, r.mae, r.ms_per_run))
-        rows.append((kind, *np.mean(cells, axis=0), trained.fit_seconds))
+        for set_name, tests in test_sets.items():
+            cells = [_cells(r.prediction, m, r.ms_per_run) for r, m in zip(score_model(trained.model, tests), tests)]
+            rows[set_name].append((kind, *np.mean(cells, axis=0), trained.fit_seconds))
     return rows
 
 
-def print_table(title: str, rows: list[tuple[str, float, float, float, float, float]], unit: str) -> None:
+def print_table(title: str, rows: list[Row], unit: str) -> None:
     print(f"\n**{title}**\n")
     print(f"| model | RMSE [{unit}] | MAXE [% p-p] | MAE [{unit}] | ms per run | train [s] |")
     print("|---|---:|---:|---:|---:|---:|")
@@ -115,25 +121,36 @@ def print_table(title: str, rows: list[tuple[str, float, float, float, float, fl
 
 
 def tables(data: Path, epochs: int, scratch: Path) -> None:
-    print_table(
-        "HIL rate_dependence, sines 0.05-1 Hz, train seed 1, test seed 2",
-        table_rows(hil(1, scratch), [hil(2, scratch)], epochs),
-        "mm",
-    )
+    friction = {}
+    records = {}
+    for seed in (1, 2, 6):
+        records[seed] = hil(seed, scratch)
+        truth = json.loads((scratch / f"rate_seed{seed}.truth.json").read_text())
+        friction[seed] = truth["parameters"]["rate_friction_s_per_m"]
+    hil_rows = table_rows(records[1], {"2": [records[2]], "6": [records[6]]}, epochs)
+    for seed in (2, 6):
+        print_table(
+            f"HIL rate_dependence, sines 0.05-1 Hz, train seed 1 (rate friction {friction[1]:.1f}), "
+            f"test seed {seed} (rate friction {friction[seed]:.1f})",
+            hil_rows[str(seed)],
+            "mm",
+        )
     muscle = data / "pam_muscle_sensory" / "2026-07-22_Literature_Comparison"
     if muscle.is_dir():
         record = joined(muscle)
         cut = int(0.7 * len(record))
-        print_table(
-            "real muscle 2026-07-22, first 70 % train, last 30 % test",
-            table_rows(record.slice(0, cut), [record.slice(cut)], epochs),
-            "mm",
-        )
+        rows = table_rows(record.slice(0, cut), {"test": [record.slice(cut)]}, epochs)["test"]
+        print_table("real muscle 2026-07-22, first 70 % train, last 30 % test", rows, "mm")
     piezo = data / "piezo_dspace"
     if piezo.is_dir():
         train = load_measurement(piezo / "20_hz_no_lp.csv")
-        runs = [load_measurement(piezo / f"{name}.csv") for name in PIEZO_RUNS]
-        print_table("real piezo, train 20_hz_no_lp, mean over the six runs", table_rows(train, runs, epochs), "um")
+        runs = {name: [load_measurement(piezo / f"{name}.csv")] for name in PIEZO_RUNS}
+        per_run = table_rows(train, runs, epochs)
+        mean_rows = [(rows[0][0], *np.mean([r[1:] for r in rows], axis=0)) for rows in zip(*per_run.values())]
+        print_table("real piezo, train 20_hz_no_lp, mean over the six runs", mean_rows, "um")
+        print("\nper run, RMSE [um]: | model | " + " | ".join(PIEZO_RUNS) + " |")
+        for index, name in enumerate(r[0] for r in mean_rows):
+            print(f"| {name} | " + " | ".join(f"{per_run[run][index][1]:.3f}" for run in PIEZO_RUNS) + " |")
 
 
 def latency(scratch: Path, steps: int = 20_000, rounds: int = 3) -> None:
