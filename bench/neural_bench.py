@@ -1,6 +1,6 @@
 """Neural hysteresis models: seed 001 Table 1 on HIL and real data, step latency, closed loop.
 
-Usage: python bench/neural_bench.py [--data ../shared/data] [--epochs 60] [--only tables|latency|loop]
+Usage: python bench/neural_bench.py [--data ../shared/data] [--epochs 150] [--only tables|latency|loop|tick]
 
 1. Table 1 (RMSE, MAXE % of p-p, MAE, ms per free run) of PI, MPI, Preisach, Hammerstein and
    LSTM-NARMAX, every test scored after its calibration window (host/evaluate.py):
@@ -12,6 +12,7 @@ Usage: python bench/neural_bench.py [--data ../shared/data] [--epochs 60] [--onl
    CPU time, measured interleaved in one run.
 3. Closed loop on the HIL through ``pmactl edge run``: PID, PID + feedforward, PID +
    feedforward + trained correction, on seed 000's sine and seed 002's amplitude ramp.
+4. Whole-tick compute with that correction (bench/edge_bench.py's breakdown).
 """
 
 from __future__ import annotations
@@ -316,11 +317,32 @@ def closed_loop(scratch: Path) -> None:
         )
 
 
+def tick_compute(scratch: Path) -> None:
+    """bench/edge_bench.py's per-tick breakdown, on a bundle carrying the trained correction."""
+    from host.train.correction import correction_bundle
+
+    sys.path.insert(0, str(HERE))
+    import edge_bench
+
+    bundle = scratch / "tick_bundle"
+    subprocess.run(
+        [
+            "pmactl", "fit", "--model", "preisach", "--units", "bar,mm", "--save", str(bundle),
+            "--train", str(HERE.parent / "host" / "example_data" / "pma_triangles.csv"),
+        ],
+        check=True,
+        capture_output=True,
+    )  # fmt: skip
+    correction_bundle(bundle)
+    print("\n**Whole-tick compute with the trained correction (3-16-16-1)**, via bench/edge_bench.py's breakdown")
+    edge_bench.breakdown(bundle)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=HERE.parent.parent / "shared" / "data")
     parser.add_argument("--epochs", type=int, default=150, help="LSTM-NARMAX epochs (Hammerstein: 60)")
-    parser.add_argument("--only", choices=["tables", "latency", "loop"])
+    parser.add_argument("--only", choices=["tables", "latency", "loop", "tick"])
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as scratch_dir:
         scratch = Path(scratch_dir)
@@ -330,6 +352,8 @@ def main() -> int:
             latency(scratch)
         if args.only in (None, "loop"):
             closed_loop(scratch)
+        if args.only in (None, "tick"):
+            tick_compute(scratch)
     return 0
 
 
