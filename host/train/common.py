@@ -1,7 +1,8 @@
 """What every trainer shares: seeding, the held-out tail, early stopping, progress, the curve.
 
-A training record is split in time: the first ``1 - tail_fraction`` trains, the last
-``tail_fraction`` (default 20 %) is held out for early stopping only. Training starts where the
+A training record is split in time: the first ``1 - tail_fraction`` trains the net, the last
+``tail_fraction`` (default 20 %) is held out for its early stopping. The hysteresis operator
+under the net is identified on the whole record, as ``pmactl fit`` identifies the baselines. Training starts where the
 hysteresis memory is known (:func:`host.identify.common.memory_start`), as ``pmactl fit`` does.
 """
 

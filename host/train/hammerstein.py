@@ -147,9 +147,10 @@ def train_hammerstein(
     import torch
     from torch import nn
 
+    # MPI on the whole record, as ``pmactl fit --model mpi`` (the baseline it is compared with);
+    # the tail is held out from the net's training and the ARX fit only
     operator = identify_mpi(u, y)
     split: Split = split_fn(operator.start_index)  # type: ignore[operator]
-    operator = identify_mpi(u[: split.tail], y[: split.tail])  # the tail stays held out
     n_all = operator.operator.simulate(u[split.start :], operator.start_branch)
     u_all, y_all = u[split.start :], y[split.start :]
     n_train = split.tail - split.start

@@ -129,10 +129,10 @@ def train_lstm_narmax(
     import torch
     from torch import nn
 
-    operator = identify_tanh_pi(u[: int(0.8 * u.size)], y[: int(0.8 * u.size)])
+    # the operator is identified on the whole record, as ``pmactl fit`` would (the baselines it is
+    # compared with see the same data); the tail is held out from the net's training only
+    operator = identify_tanh_pi(u, y)
     split: Split = split_fn(operator.start_index)  # type: ignore[operator]
-    if split.tail < int(0.8 * u.size):  # identify the operator on the training part only
-        operator = identify_tanh_pi(u[: split.tail], y[: split.tail])
     n_all = operator.operator.simulate(u[split.start :], operator.start_branch)
     u_all, y_all = u[split.start :], y[split.start :]
     n_train = split.tail - split.start
