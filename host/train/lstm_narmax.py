@@ -173,6 +173,7 @@ def train_lstm_narmax(
     def snapshot() -> dict[str, object]:
         return {"lstm": lstm.state_dict(), "head": head.state_dict()}
 
+    stopper.update(tail_rmse(weights()), snapshot())  # head at zero: the operator alone, to beat
     teacher_epochs = max(1, (2 * epochs) // 3)
     optimiser = torch.optim.Adam(params, lr=1e-2)
     for epoch in progress(teacher_epochs, "lstm-narmax teacher forcing", quiet):
