@@ -101,3 +101,8 @@ def test_lstm_narmax_learns_what_its_operator_misses(rate_records):
 
     alone = predict_with_candidates(operator.simulate, test.u, test.y)
     assert result.prediction.score.rmse < 0.8 * alone.score.rmse
+
+
+def test_zero_epochs_is_refused(rate_records, capsys):
+    assert main(["train", "--model", "lstm-narmax", "--train", str(rate_records[0]), "--epochs", "0"]) == 2
+    assert "--epochs 0 must be at least 1" in capsys.readouterr().err

@@ -41,6 +41,10 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.epochs is not None and args.epochs < 1:
+        raise DataError(f"--epochs {args.epochs} must be at least 1")
+    if args.epochs is None:
+        args.epochs = DEFAULT_EPOCHS[args.model]
     if args.model == "correction":
         return _run_correction(args)
     if args.bundle:
@@ -51,9 +55,7 @@ def run(args: argparse.Namespace) -> int:
 
     records = [load_measurement(path) for path in args.train]
     tests = [load_measurement(path) for path in args.test]
-    trained = train_model(
-        args.model, records, seed=args.seed, epochs=args.epochs or DEFAULT_EPOCHS[args.model], quiet=args.json
-    )
+    trained = train_model(args.model, records, seed=args.seed, epochs=args.epochs, quiet=args.json)
     results = score_model(trained.model, tests, args.calibration)
     tests_json = [
         {
@@ -71,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
             "model": args.model,
             "train": [Path(p).name for p in args.train],
             "seed": args.seed,
-            "epochs": args.epochs or DEFAULT_EPOCHS[args.model],
+            "epochs": args.epochs,
             "fit_seconds": trained.fit_seconds,
             "tests": tests_json,
         }
@@ -106,9 +108,7 @@ def _run_correction(args: argparse.Namespace) -> int:
     if not args.bundle:
         raise DataError("--model correction needs --bundle DIR: the bundle whose feedforward it corrects")
     records = [load_measurement(path) for path in args.train]
-    result = train_correction_into(
-        args.bundle, records, seed=args.seed, epochs=args.epochs or DEFAULT_EPOCHS["correction"], quiet=args.json
-    )
+    result = train_correction_into(args.bundle, records, seed=args.seed, epochs=args.epochs, quiet=args.json)
     if args.save:
         result.curve.save_png(Path(args.save) / "training_curve.png", "correction training")
     if args.json:
