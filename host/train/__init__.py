@@ -122,5 +122,8 @@ def save_model(trained: Trained, directory: str | Path, record: dict[str, object
         "operator": {"file": "operator.npz", **operator.describe()},
         "training": {**record, "curve": model.curve.as_dict(), "curve_png": curve_png.name},
     }
+    if isinstance(model, Hammerstein):
+        w = model.weights
+        description["arx"] = {"orders": list(w.orders), "a": w.a.tolist(), "b": w.b.tolist(), "selection": model.aic}
     (directory / "model.json").write_text(json.dumps(description, indent=2) + "\n")
     return directory
