@@ -1,4 +1,5 @@
-"""Small ONNX models built in the tests (until training exports real ones), with numpy twins."""
+"""Small hand-built ONNX models with numpy twins: edge-side tests that need a known net and no
+training (trained nets are exported by ``models_export.onnx_step``, tested in test_export.py)."""
 
 from __future__ import annotations
 

@@ -120,6 +120,8 @@ def build_parser() -> argparse.ArgumentParser:
     importlib.import_module("host.cli.deploy").register(sub)
     importlib.import_module("host.cli.sweep").register(sub)
     importlib.import_module("host.cli.identify").register(sub)
+    importlib.import_module("host.cli.train").register(sub)
+    importlib.import_module("host.cli.quantise").register(sub)
     return parser
 
 

@@ -1,0 +1,122 @@
+"""``pmactl train``: the neural hysteresis models and the edge's correction (host/train)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from edge.errors import DataError
+from host.data import load_measurement
+
+DEFAULT_EPOCHS = {"hammerstein": 60, "lstm-narmax": 150, "correction": 300}
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
+    """Add ``pmactl train`` to the command line."""
+    from host.cli import _lazy
+
+    train = sub.add_parser("train", help="train a neural hysteresis model (torch) or the edge's correction")
+    train.add_argument("--model", required=True, choices=["hammerstein", "lstm-narmax", "correction"])
+    train.add_argument(
+        "--train", required=True, action="append", metavar="CSV", help="training recording (t,u,y); repeat to join"
+    )
+    train.add_argument("--test", action="append", default=[], metavar="CSV", help="held-out recording (repeatable)")
+    train.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same model")
+    train.add_argument(
+        "--epochs", type=int, help="training epochs (default: hammerstein 60, lstm-narmax 150, correction 300)"
+    )
+    train.add_argument(
+        "--calibration",
+        type=float,
+        default=0.1,
+        metavar="FRACTION",
+        help="share of each test record after the input moves used for its start state and offset (never scored)",
+    )
+    train.add_argument("--bundle", metavar="DIR", help="correction only: the bundle whose feedforward it corrects")
+    train.add_argument("--json", action="store_true", help="print one JSON object (no progress bar)")
+    train.add_argument("--save", metavar="DIR", help="write step.onnx, model.json, operator.npz, training_curve.png")
+    train.set_defaults(run=_lazy("host.cli.train"))
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.epochs is not None and args.epochs < 1:
+        raise DataError(f"--epochs {args.epochs} must be at least 1")
+    if args.epochs is None:
+        args.epochs = DEFAULT_EPOCHS[args.model]
+    if args.model == "correction":
+        return _run_correction(args)
+    if args.bundle:
+        raise DataError("--bundle applies to --model correction only; use --save DIR for a trained model")
+    if not 0 < args.calibration < 0.9:
+        raise DataError(f"--calibration {args.calibration} must be between 0 and 0.9")
+    from host.train import save_model, score_model, train_model
+
+    records = [load_measurement(path) for path in args.train]
+    tests = [load_measurement(path) for path in args.test]
+    trained = train_model(args.model, records, seed=args.seed, epochs=args.epochs, quiet=args.json)
+    results = score_model(trained.model, tests, args.calibration)
+    tests_json = [
+        {
+            "file": r.name,
+            "rmse": r.prediction.score.rmse,
+            "rmse_pct_pp": r.prediction.score.rmse_pct_pp,
+            "max_error": r.prediction.score.max_error,
+            "mae": r.mae,
+            "ms_per_run": r.ms_per_run,
+        }
+        for r in results
+    ]
+    if args.save:
+        record = {
+            "model": args.model,
+            "train": [Path(p).name for p in args.train],
+            "seed": args.seed,
+            "epochs": args.epochs,
+            "fit_seconds": trained.fit_seconds,
+            "tests": tests_json,
+        }
+        save_model(trained, args.save, record)
+    if args.json:
+        print(json.dumps({"model": args.model, "fit_seconds": trained.fit_seconds, "tests": tests_json}))
+        return 0
+    print(
+        f"{args.model}: trained on {', '.join(Path(p).name for p in args.train)} ({trained.samples} samples; memory "
+        f"known from sample {trained.memory_start}, early stopping on samples {trained.tail_start}+) "
+        f"in {trained.fit_seconds:.1f} s, seed {args.seed}"
+    )
+    if results:
+        print(f"{'test file':<28} {'scored':>7} {'RMSE':>9} {'% p-p':>7} {'max err':>9} {'MAE':>9} {'ms/run':>8}")
+        for r, j in zip(results, tests_json):
+            print(
+                f"{r.name:<28} {r.prediction.score.samples:>7} {j['rmse']:>9.4g} {j['rmse_pct_pp']:>7.2f} "
+                f"{j['max_error']:>9.4g} {j['mae']:>9.4g} {j['ms_per_run']:>8.1f}"
+            )
+    else:
+        print("no --test given: pass held-out recordings with --test to score the model")
+    if args.save:
+        print(
+            f"model written to {args.save} (step.onnx, model.json, operator.npz, training_curve.png)", file=sys.stdout
+        )
+    return 0
+
+
+def _run_correction(args: argparse.Namespace) -> int:
+    from host.train.correction import train_correction_into
+
+    if not args.bundle:
+        raise DataError("--model correction needs --bundle DIR: the bundle whose feedforward it corrects")
+    records = [load_measurement(path) for path in args.train]
+    result = train_correction_into(args.bundle, records, seed=args.seed, epochs=args.epochs, quiet=args.json)
+    if args.save:
+        result.curve.save_png(Path(args.save) / "training_curve.png", "correction training")
+    if args.json:
+        print(json.dumps(result.as_dict()))
+        return 0
+    print(
+        f"correction trained on {', '.join(Path(p).name for p in args.train)} in {result.fit_seconds:.1f} s: "
+        f"held-out tail RMSE {result.tail_rmse_bar:.4f} bar (feedforward alone {result.tail_rmse_ff_bar:.4f} bar); "
+        f"added to {args.bundle} (features {', '.join(result.features)})"
+    )
+    return 0

@@ -1,0 +1,82 @@
+"""The trained correction in a bundle: better than the feedforward alone, gated int8, loaded by the edge."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from edge.control.neural import NeuralCorrection
+from edge.runtime.bundle import load_bundle
+from host.cli import main
+from tests.neural_data import hil_csv
+
+
+@pytest.fixture(scope="module")
+def corrected(tmp_path_factory):
+    root = tmp_path_factory.mktemp("corr")
+    bundle = root / "bundle"
+    assert (
+        main(
+            [
+                "fit",
+                "--model",
+                "preisach",
+                "--train",
+                str(hil_csv(root, "triangles", 5, 80.0)),
+                "--units",
+                "bar,mm",
+                "--save",
+                str(bundle),
+            ]
+        )
+        == 0
+    )
+    return root, bundle
+
+
+def test_the_trained_correction_beats_the_feedforward_alone_held_out(corrected, capsys):
+    root, bundle = corrected
+    capsys.readouterr()
+    train = hil_csv(root, "sines", 6, 60.0)
+    assert main(["train", "--model", "correction", "--train", str(train), "--bundle", str(bundle), "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["tail_rmse_bar"] < 0.85 * record["feedforward_only_tail_rmse_bar"]
+    loaded = load_bundle(bundle)
+    spec = loaded.correction_spec
+    assert spec is not None and spec["features"] == ["reference_mm", "reference_rate_mm_s", "feedforward_bar"]
+    NeuralCorrection(loaded.correction_path, spec)  # the edge opens it: names and shapes match
+
+
+def test_quantise_records_both_measurements_and_applies_the_rule(corrected, capsys):
+    root, bundle = corrected
+    if load_bundle(bundle).correction_spec is None:
+        pytest.skip("needs the correction of the test above")
+    capsys.readouterr()
+    assert main(["quantise", str(bundle), "--calibration", str(hil_csv(root, "sines", 7, 30.0)), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    manifest = json.loads((bundle / "manifest.json").read_text())
+    assert manifest["correction"]["quantisation"] == report
+    variants = report["variants"]
+    assert set(variants) == {"float32", "dynamic_int8", "dynamic_int8_reduce_range", "static_qdq"}
+    base = variants["float32"]
+    allowed = [
+        name
+        for name, m in variants.items()
+        if name != "float32"
+        and m["rmse_bar"] <= 1.05 * base["rmse_bar"]
+        and m["us_per_step_wall"] < base["us_per_step_wall"]
+    ]
+    assert report["kept"] in (allowed or ["float32"])
+    loaded = load_bundle(bundle)  # checksums still verify
+    NeuralCorrection(loaded.correction_path, loaded.correction_spec)
+
+
+def test_quantise_without_a_correction_is_one_clear_error(tmp_path, capsys):
+    bundle = tmp_path / "b"
+    assert (
+        main(["fit", "--model", "pi", "--train", str(hil_csv(tmp_path, "triangles", 8, 40.0)), "--save", str(bundle)])
+        == 0
+    )
+    assert main(["quantise", str(bundle), "--calibration", str(hil_csv(tmp_path, "sines", 9, 20.0))]) == 2
+    assert "no correction to quantise" in capsys.readouterr().err
