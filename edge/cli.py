@@ -48,7 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     erun.set_defaults(run=run)
     etel = edge_sub.add_parser("telemetry", help="summarise a telemetry file; export CSV, MCAP or a plot")
     etel.add_argument("file", metavar="FILE", help="telemetry written by pmactl edge run --telemetry")
-    etel.add_argument("--csv", metavar="OUT.csv")
+    etel.add_argument("--csv", metavar="OUT.csv", help="write every telemetry row as CSV here")
     etel.add_argument("--mcap", metavar="OUT.mcap", help="for Foxglove / PlotJuggler (one JSON message per tick)")
     etel.add_argument("--plot", metavar="OUT.png", help="needs matplotlib (the host extra)")
     etel.set_defaults(run=telemetry)

@@ -129,8 +129,15 @@ def test_demo_identifies_the_shipped_muscle_data(demo):
 
 
 def test_demo_feedforward_halves_the_tracking_error(demo):
-    pid, with_ff = demo[0]["closed_loop"]
+    pid, with_ff, _ = demo[0]["closed_loop"]
     assert pid["faults"] == [] == with_ff["faults"] and with_ff["rms_error"] <= 0.5 * pid["rms_error"]
+
+
+def test_demo_trained_correction_beats_feedforward_alone(demo):
+    """The third row runs the bundle's trained correction (issue target: RMS <= 0.35x PID alone)."""
+    pid, with_ff, with_nn = demo[0]["closed_loop"]
+    assert with_nn["faults"] == [] and with_nn["rms_error"] <= 0.35 * pid["rms_error"]
+    assert with_nn["rms_error"] < with_ff["rms_error"]
 
 
 def test_demo_writes_its_figures_and_bundles_into_out(demo):

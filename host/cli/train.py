@@ -18,7 +18,13 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
     from host.cli import _lazy
 
     train = sub.add_parser("train", help="train a neural hysteresis model (torch) or the edge's correction")
-    train.add_argument("--model", required=True, choices=["hammerstein", "lstm-narmax", "correction"])
+    train.add_argument(
+        "--model",
+        required=True,
+        choices=["hammerstein", "lstm-narmax", "correction"],
+        help="hammerstein (seed 000: MPI + BP net + ARX), lstm-narmax (seed 001), or correction "
+        "(the edge's inverse correction, added to --bundle)",
+    )
     train.add_argument(
         "--train", required=True, action="append", metavar="CSV", help="training recording (t,u,y); repeat to join"
     )
