@@ -159,7 +159,9 @@ def telemetry(args: argparse.Namespace) -> int:
 def _check_output(path: Path, option: str, suffixes: tuple[str, ...] | None) -> None:
     """One line if ``path`` cannot be written as ``option``'s output file."""
     if suffixes and path.suffix.lower() not in suffixes:
-        raise DataError(f"{option} {path}: unsupported file type; use one of {', '.join(suffixes)}")
+        raise DataError(
+            f"{option} {path}: cannot write the format '{path.suffix}'; end the name in {' or '.join(suffixes)}"
+        )
     if path.is_dir():
         raise DataError(f"{option} {path}: is a directory; name a file")
     parent = path.parent if str(path.parent) else Path(".")

@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from edge.errors import BundleError
-from edge.runtime.bundle import MANIFEST
+from edge.runtime.bundle import MANIFEST, resolve_release
 from models_export.bundle import add_correction
 from models_export.onnx_step import session
 
@@ -107,7 +107,8 @@ def quantise_bundle(
 ) -> dict[str, object]:
     """Measure the variants on ``(features, target)``, apply the rule, record it (module docstring)."""
     bundle = Path(bundle_dir)
-    manifest = json.loads((bundle / MANIFEST).read_text())
+    release = resolve_release(bundle)  # a bundle directory is releases/ + current (models_export.store)
+    manifest = json.loads((release / MANIFEST).read_text())
     spec = manifest.get("correction")
     if not isinstance(spec, dict):
         raise BundleError(f"{bundle}: no correction to quantise; train one with pmactl train --model correction")
@@ -123,7 +124,7 @@ def quantise_bundle(
     with tempfile.TemporaryDirectory() as scratch_dir:
         scratch = Path(scratch_dir)
         source = scratch / "float32.onnx"
-        shutil.copy2(bundle / str(spec["file"]), source)
+        shutil.copy2(release / str(spec["file"]), source)
         paths = _variants(source, scratch, input_name, x[:split])
         measured: dict[str, dict[str, float]] = {}
         for name, path in paths.items():

@@ -55,7 +55,7 @@ def test_quantise_records_both_measurements_and_applies_the_rule(corrected, caps
     capsys.readouterr()
     assert main(["quantise", str(bundle), "--calibration", str(hil_csv(root, "sines", 7, 30.0)), "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
-    manifest = json.loads((bundle / "manifest.json").read_text())
+    manifest = json.loads((load_bundle(bundle).path / "manifest.json").read_text())  # the new current release
     assert manifest["correction"]["quantisation"] == report
     variants = report["variants"]
     assert set(variants) == {"float32", "dynamic_int8", "dynamic_int8_reduce_range", "static_qdq"}

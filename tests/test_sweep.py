@@ -186,12 +186,13 @@ def test_an_axis_fills_a_toml_key_and_keeps_the_rest_of_the_file():
 
     source = Path(str(builtin_values(Path("."))["hil_config"])).read_text()
     url = "sim://rig?adc=ADS1015&clock=lockstep&effect=creep&seed=7"
-    edited = set_toml_key(source, "rig.io", url, "test")
-    assert tomllib.loads(edited)["rig"]["io"] == url
-    assert {k: v for k, v in tomllib.loads(edited).items() if k != "rig"} == {
-        k: v for k, v in tomllib.loads(source).items() if k != "rig"
-    }
-    changed = [a for a, b in zip(source.splitlines(), edited.splitlines()) if a != b]
+    edited = set_toml_key(source, "buses.i2c.url", url, "test")
+    assert tomllib.loads(edited)["buses"]["i2c"]["url"] == url
+    before, after = tomllib.loads(source), tomllib.loads(edited)
+    before["buses"]["i2c"].pop("url"), after["buses"]["i2c"].pop("url")
+    assert before == after
+    assert len(source.splitlines()) == len(edited.splitlines())
+    changed = [b for a, b in zip(source.splitlines(), edited.splitlines()) if a != b]
     assert len(changed) == 1 and "sim://rig" in changed[0]  # comments and layout untouched
     added = set_toml_key(source, "faults.nack_burst_at_s", 3.5, "test")  # a section that does not exist yet
     assert tomllib.loads(added)["faults"] == {"nack_burst_at_s": 3.5}
@@ -336,7 +337,7 @@ def test_hil_run_cells_fill_the_rig_config_from_their_axes(tmp_path):
     rows = {r["effect"]: r for r in result.rows}
     for effect, row in rows.items():
         config = tomllib.loads((tmp_path / "out" / "cells" / row["cell"] / "attempt-1" / "rig.toml").read_text())
-        assert f"effect={effect}&seed={row['seed']}" in config["rig"]["io"]
+        assert f"effect={effect}&seed={row['seed']}" in config["buses"]["i2c"]["url"]
         assert row["run.ticks"] > 0 and row["run.feedforward"] is True
     # a dead time in the loop costs tracking (or trips the tracking-error fault)
     delayed = rows["transport_delay"]

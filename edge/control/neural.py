@@ -70,7 +70,8 @@ class NeuralCorrection:
         if state is not None:
             assert isinstance(state, Mapping)
             self.state_names = (str(state.get("input")), str(state.get("output")))
-            state_size = int(state.get("size", 0))  # type: ignore[call-overload]
+            size = state.get("size", 0)
+            state_size = int(size) if isinstance(size, int | float | str) else 0
             if state_size <= 0:
                 raise BundleError(f"{self.path}: correction state size must be a positive integer")
         options = ort.SessionOptions()

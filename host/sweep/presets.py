@@ -90,7 +90,7 @@ KINDS: dict[str, JobKind] = {
             },
             choices={"controller": CONTROLLERS},
             resources=Resources(num_cpus=1, memory_mb=512),
-            files={"config": {"template": "{hil_config}", "name": "rig.toml", "set": {"rig.io": SIM_IO}}},
+            files={"config": {"template": "{hil_config}", "name": "rig.toml", "set": {"buses.i2c.url": SIM_IO}}},
             timing_columns=("*lateness*", "*.overruns*", "*.realtime"),
         ),
         JobKind(

@@ -8,7 +8,7 @@ braces pass through untouched.
 
 ``set_toml_key`` edits one key of a TOML document as text (comments and layout of every other
 line kept) and reads the result back to prove the edit took effect; that is how an axis fills
-a rig config's ``rig.io = "sim://rig?effect={effect}"`` without a copy of the file per value.
+a rig config's ``buses.i2c.url = "sim://rig?effect={effect}"`` without a copy of the file per value.
 """
 
 from __future__ import annotations
@@ -76,7 +76,7 @@ def render_value(value: Value, values: Mapping[str, Value], where: str) -> Value
 def set_toml_key(text: str, dotted_key: str, value: Value, where: str) -> str:
     """``text`` (a TOML document) with ``dotted_key`` = ``value``; section created if missing.
 
-    ``"rig.io"`` is key ``io`` of section ``[rig]``; ``"sensors.contraction.channel"`` is key
+    ``"buses.i2c.url"`` is key ``url`` of section ``[buses.i2c]``; ``"sensors.contraction.channel"`` is key
     ``channel`` of ``[sensors.contraction]``; a key without a dot lives before the first section.
     """
     section, _, key = dotted_key.rpartition(".")
