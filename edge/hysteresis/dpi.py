@@ -30,11 +30,12 @@ scale weighted by the digit's ``dY`` of the other direction. Each reversal can t
 multiply the mismatch by up to ``max_i dYc_i / dYe_i`` (or its reciprocal); the forward model
 has the same factor with ``dX`` (1 for identified models, whose digits have equal widths). This
 is a property of the model, not of the arithmetic: evaluated in 80-digit arithmetic, the inverse
-of the DPI identified from the shipped example data (floored digits of slope 0.148 whose other
-direction has slope 45 or 93: ratios 300 and 630) moves by 3e-6 bar when its input moves by 1e-15 (relative). With
-per-digit ratios up to 3 the round trip is exact to ~1e-13 of the range over thousands of
-reversals, whatever the spread of slopes between digits; with the identified model it is
-~5e-9 bar typically and up to ~4e-6 bar (1e-6 of the range) for parameter sets 1e-13 away.
+of a DPI fitted without an asymmetry bound to the shipped example data (floored digits of slope
+0.148 whose other direction has slope 45 or 93: ratios 300 and 630) moves by 3e-6 bar when its
+input moves by 1e-15 (relative), and its round trip reached 4e-6 bar. With per-digit ratios up
+to 3 the round trip is exact to ~1e-13 of the range over thousands of reversals, whatever the
+spread of slopes between digits; the identification therefore bounds the ratio (10 by default,
+:class:`host.identify.dpi.DPIEstimator`), which gives ~2e-12 bar on the example data.
 Fills within ``_SNAP`` (1e-10) of 0 or 1 are snapped: that resets the rounding-sized fill
 mismatch a reversal at a digit boundary would otherwise amplify, and moves the output by at most
 ``1e-10 dY_i``.
