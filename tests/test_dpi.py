@@ -9,7 +9,9 @@ from hypothesis import strategies as st
 
 from edge.errors import ModelError
 from edge.hysteresis.dpi import DPIModel
+from edge.hysteresis.lut import CompiledModel
 from edge.hysteresis.pi import PIModel
+from edge.hysteresis.table import LookupTable
 from host.identify.dpi import DPIEstimator
 from tests.conftest import random_walk
 from tests.strategies import random_dpi, random_pi, seeds
@@ -179,3 +181,19 @@ def test_fit_bounds_every_digits_asymmetry():
 def test_asymmetry_bound_below_one_is_refused():
     with pytest.raises(ModelError, match="max_asymmetry must be >= 1"):
         DPIEstimator(max_asymmetry=0.5)
+
+
+def test_a_table_written_before_the_turning_point_was_stored_runs_the_same_model():
+    """Older DPI tables hold no ``turn_*`` arrays: they start a branch where they stand, which is
+    the same branch in exact arithmetic."""
+    rng = np.random.default_rng(5)
+    model = random_dpi(rng)
+    lo, hi = model.input_range
+    model.reset(lo + 0.3 * (hi - lo), "centered")
+    model.step(lo + 0.6 * (hi - lo))  # mid-branch: the turning point differs from the state
+    table = model.compile()
+    old = LookupTable(table.kind, table.stages, dict(table.arrays), table.input_range)
+    for key in ("0.turn_fills", "0.turn_cursor"):
+        del old.arrays[key]
+    u = random_walk(rng, 500, lo, hi, 0.2 * (hi - lo))
+    np.testing.assert_allclose(CompiledModel(old).simulate(u), CompiledModel(table).simulate(u), atol=1e-9)
