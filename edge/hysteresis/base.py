@@ -10,7 +10,7 @@ A model maps an input signal to an output signal with memory. Each one offers
 * ``input_range``: inputs outside it are clamped to it and ``saturated`` is set for that step.
   For an inverse this is the range of outputs the actuator can reach: a desired output beyond
   it is clamped and flagged, never NaN;
-* ``compile()``: the lookup-table form (:class:`edge.hysteresis.lut.LookupTable`).
+* ``compile()``: the lookup-table form (:class:`edge.hysteresis.table.LookupTable`).
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from edge.errors import ModelError
+from edge.hysteresis.table import LookupTable
 
 Branch = Literal["ascending", "descending", "centered"]
 """Initial memory for ``reset``: arrived at ``u0`` from the bottom of the model's range
@@ -133,7 +134,7 @@ class HysteresisModel(abc.ABC):
         """The inverse model: its input is this model's output and vice versa."""
 
     @abc.abstractmethod
-    def compile(self) -> LookupTable:  # noqa: F821  (imported lazily to avoid a cycle)
+    def compile(self) -> LookupTable:
         """The lookup-table form of this model in its current state."""
 
     def simulate(self, u: ArrayLike) -> NDArray[np.float64]:

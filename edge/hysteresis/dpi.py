@@ -19,12 +19,26 @@ the branch and keeps the identified parameters unchanged. The same scaling is ap
 input increments, so the model is symmetric in ``X`` and ``Y``: the inverse is the same model
 with the pairs swapped (eqs 21-22), exact up to rounding.
 
-Rounding is amplified where neighbouring digits have very different slopes: a relative
-difference ``d`` between the forward and inverse branch scales moves ``d * dY_big`` of output
-across a digit boundary into a digit of slope ``dY_small``. With random models the round trip
-is exact to 1e-9; with identified models whose digit slopes differ by ~500x (floored slopes
-next to steep ones) it is ~1e-8 .. 1e-5 of the input range. Irrelevant for control, stated so
-nobody hunts for a logic error.
+Each branch is evaluated in closed form from its turning point (fills and output from the
+turning point's state and the input travelled since it), so the output carries the roundings of
+the current branch only, not one per tick of the whole history.
+
+Conditioning. The forward and the inverse model evolve separately (two tables on the edge), so
+the inverse sees the forward's output rounded to a double. A digit's fill is then known to the
+inverse only to ``eps |y| / dY_i``, and at the next reversal that error enters the compensator
+scale weighted by the digit's ``dY`` of the other direction. Each reversal can therefore
+multiply the mismatch by up to ``max_i dYc_i / dYe_i`` (or its reciprocal); the forward model
+has the same factor with ``dX`` (1 for identified models, whose digits have equal widths). This
+is a property of the model, not of the arithmetic: evaluated in 80-digit arithmetic, the inverse
+of a DPI fitted without an asymmetry bound to the shipped example data (floored digits of slope
+0.148 whose other direction has slope 45 or 93: ratios 300 and 630) moves by 3e-6 bar when its
+input moves by 1e-15 (relative), and its round trip reached 4e-6 bar. With per-digit ratios up
+to 3 the round trip is exact to ~1e-13 of the range over thousands of reversals, whatever the
+spread of slopes between digits; the identification therefore bounds the ratio (10 by default,
+:class:`host.identify.dpi.DPIEstimator`), which gives ~2e-12 bar on the example data.
+Fills within ``_SNAP`` (1e-10) of 0 or 1 are snapped: that resets the rounding-sized fill
+mismatch a reversal at a digit boundary would otherwise amplify, and moves the output by at most
+``1e-10 dY_i``.
 """
 
 from __future__ import annotations
@@ -36,12 +50,19 @@ from edge.errors import ModelError
 from edge.hysteresis.base import HysteresisModel, as_signal, check_range
 from edge.hysteresis.table import LookupTable
 
-_SNAP = 1e-12  # fills this close to 0 or 1 are rounding residue: snapped to the digit value
+_SNAP = 1e-10  # see the module docstring
 _NEGLIGIBLE = 1e-9  # a remaining branch shorter than this share of the range needs no scaling
 
 
 class DPIKernel:
-    """Per-tick DPI evaluation on plain Python floats (shared by the model and its table)."""
+    """Per-tick DPI evaluation on plain Python floats (shared by the model and its table).
+
+    Each branch is evaluated in closed form from its turning point: the fills and the output
+    follow from the turning point's fills and cursor and the input travelled since the turn,
+    ``y = y_turn +/- by * sum_i |s_i - s_i,turn| dY_i``, instead of adding one increment per
+    tick. The output then carries a few roundings of the current branch, not one per tick of
+    the whole history (see the module docstring for why that matters to the inverse).
+    """
 
     stage = "dpi"
 
@@ -53,9 +74,16 @@ class DPIKernel:
         self._x0, self._y0, self._x1, self._y1 = arrays["anchors"].tolist()
         self._compensate = bool(arrays["compensate"])
         self._n = len(self._dxe)
-        self.s = arrays["fills"].tolist()
+        self.s: list[float] = arrays["fills"].tolist()
         self.x, self.y, direction, self.bx, self.by = arrays["cursor"].tolist()
         self.direction = int(direction)
+        # the current branch's turning point; tables written before it was stored start a
+        # branch where they stand, which is the same branch in exact arithmetic
+        self.turn_s: list[float] = list(self.s)
+        self.turn_x, self.turn_y = self.x, self.y
+        if "turn_fills" in arrays:
+            self.turn_s = arrays["turn_fills"].tolist()
+            self.turn_x, self.turn_y = arrays["turn_cursor"].tolist()
 
     def arrays(self) -> dict[str, NDArray[np.float64]]:
         """Parameters and current state as arrays (the table form)."""
@@ -68,10 +96,18 @@ class DPIKernel:
             "compensate": np.array(float(self._compensate)),
             "fills": np.array(self.s),
             "cursor": np.array([self.x, self.y, self.direction, self.bx, self.by]),
+            "turn_fills": np.array(self.turn_s),
+            "turn_cursor": np.array([self.turn_x, self.turn_y]),
         }
+
+    def mark_turn(self) -> None:
+        """Make the current state the turning point the branch is evaluated from."""
+        self.turn_s[:] = self.s
+        self.turn_x, self.turn_y = self.x, self.y
 
     def _turn(self, direction: int) -> None:
         """Start a branch: compute the compensator scales (seed 002 eqs 15-20)."""
+        self.mark_turn()
         self.direction = direction
         self.bx = self.by = 1.0
         if not self._compensate:
@@ -93,54 +129,66 @@ class DPIKernel:
                 self.bx = (self.x - self._x0) / rx
                 self.by = (self.y - self._y0) / ry
 
-    def _expand(self, dx: float) -> None:
-        s, bx, by = self.s, self.bx, self.by
+    def _expand(self, x: float) -> None:
+        """Fill from the turning point by the input travelled since it (``x - turn_x``)."""
+        start_s, s, dxe, dye, bx = self.turn_s, self.s, self._dxe, self._dye, self.bx
+        left = x - self.turn_x
+        gained = 0.0  # sum of (fill gained) * dYe over the digits
         for i in range(self._n):
-            fill = s[i]
-            if fill >= 1.0:
+            start = start_s[i]
+            if start >= 1.0:
                 continue
-            width = self._dxe[i] * bx
-            room = (1.0 - fill) * width
-            if dx < room:
-                frac = dx / width
-                s[i] = fill + frac if fill + frac < 1.0 - _SNAP else 1.0
-                self.y += frac * self._dye[i] * by
-                return
+            width = dxe[i] * bx
+            room = (1.0 - start) * width
+            if left < room:
+                frac = left / width
+                if start + frac < 1.0 - _SNAP:
+                    s[i] = start + frac
+                    gained += frac * dye[i]
+                else:
+                    s[i] = 1.0
+                    gained += (1.0 - start) * dye[i]
+                break
             s[i] = 1.0
-            self.y += (1.0 - fill) * self._dye[i] * by
-            dx -= room
-            if dx <= 0.0:
-                return
+            gained += (1.0 - start) * dye[i]
+            left -= room
+        self.y = self.turn_y + gained * self.by
 
-    def _contract(self, dx: float) -> None:
-        s, bx, by = self.s, self.bx, self.by
+    def _contract(self, x: float) -> None:
+        """Empty from the turning point by the input travelled since it (``turn_x - x``)."""
+        start_s, s, dxc, dyc, bx = self.turn_s, self.s, self._dxc, self._dyc, self.bx
+        left = self.turn_x - x
+        lost = 0.0  # sum of (fill lost) * dYc over the digits
         for i in range(self._n):
-            fill = s[i]
-            if fill <= 0.0:
+            start = start_s[i]
+            if start <= 0.0:
                 continue
-            width = self._dxc[i] * bx
-            room = fill * width
-            if dx < room:
-                frac = dx / width
-                s[i] = fill - frac if fill - frac > _SNAP else 0.0
-                self.y -= frac * self._dyc[i] * by
-                return
+            width = dxc[i] * bx
+            room = start * width
+            if left < room:
+                frac = left / width
+                if start - frac > _SNAP:
+                    s[i] = start - frac
+                    lost += frac * dyc[i]
+                else:
+                    s[i] = 0.0
+                    lost += start * dyc[i]
+                break
             s[i] = 0.0
-            self.y -= fill * self._dyc[i] * by
-            dx -= room
-            if dx <= 0.0:
-                return
+            lost += start * dyc[i]
+            left -= room
+        self.y = self.turn_y - lost * self.by
 
     def step(self, x: float) -> float:
         dx = x - self.x
         if dx > 0.0:
             if self.direction != 1:
                 self._turn(1)
-            self._expand(dx)
+            self._expand(x)
         elif dx < 0.0:
             if self.direction != -1:
                 self._turn(-1)
-            self._contract(-dx)
+            self._contract(x)
         self.x = x
         return self.y
 
@@ -218,19 +266,24 @@ class DPIModel(HysteresisModel):
         k.direction, k.bx, k.by = 0, 1.0, 1.0
         k.s = [1.0 if positive else 0.0] * self.n_operators
         k.x, k.y = (x1, y1) if positive else (x0, y0)
+        k.mark_turn()
 
     def get_state(self) -> dict[str, NDArray[np.float64]]:
         arrays = self._kernel.arrays()
-        return {"fills": arrays["fills"], "cursor": arrays["cursor"]}
+        return {key: arrays[key] for key in ("fills", "cursor", "turn_fills", "turn_cursor")}
 
     def set_state(self, state: dict[str, NDArray[np.float64]]) -> None:
+        """Restore a state; one without the turning point (``turn_*``) starts a branch where it stands."""
         fills = np.asarray(state["fills"], dtype=float)
-        if fills.size != self.n_operators:
+        turn_fills = np.asarray(state.get("turn_fills", fills), dtype=float)
+        if fills.size != self.n_operators or turn_fills.size != self.n_operators:
             raise ModelError(f"DPI state has {fills.size} digits; this model has {self.n_operators}")
         k = self._kernel
         k.s = fills.tolist()
         k.x, k.y, direction, k.bx, k.by = np.asarray(state["cursor"], dtype=float).tolist()
         k.direction = int(direction)
+        k.turn_s = turn_fills.tolist()
+        k.turn_x, k.turn_y = np.asarray(state.get("turn_cursor", [k.x, k.y]), dtype=float).tolist()
 
     def inverse(self) -> DPIModel:
         """Swap the X and Y of every pair and of the anchors (seed 002 eqs 21-22)."""
@@ -257,4 +310,9 @@ class DPIModel(HysteresisModel):
 def swap_state(state: dict[str, NDArray[np.float64]]) -> dict[str, NDArray[np.float64]]:
     """The inverse model's state for a forward state: same fills, X and Y exchanged."""
     x, y, direction, bx, by = np.asarray(state["cursor"], dtype=float).tolist()
-    return {"fills": np.array(state["fills"], dtype=float), "cursor": np.array([y, x, direction, by, bx])}
+    swapped = {"fills": np.array(state["fills"], dtype=float), "cursor": np.array([y, x, direction, by, bx])}
+    if "turn_cursor" in state:
+        turn_x, turn_y = np.asarray(state["turn_cursor"], dtype=float).tolist()
+        swapped["turn_fills"] = np.array(state["turn_fills"], dtype=float)
+        swapped["turn_cursor"] = np.array([turn_y, turn_x])
+    return swapped

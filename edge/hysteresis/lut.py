@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -45,8 +46,11 @@ def write_table(table: LookupTable, path: str | Path) -> Path:
         "input_range": [_finite_or_none(v) for v in table.input_range],
         "meta": table.meta,
     }
+    # Typed Any: numpy's stub would let a ``**`` mapping of arrays fill savez's bool
+    # ``allow_pickle``; our keys are "<stage>.<name>" and ``__table__``, never that name.
+    payload: dict[str, Any] = {**table.arrays, _TABLE_KEY: np.array(json.dumps(header))}
     with path.open("wb") as handle:
-        np.savez(handle, **table.arrays, **{_TABLE_KEY: np.array(json.dumps(header))})
+        np.savez(handle, **payload)
     return path
 
 
