@@ -28,6 +28,7 @@ from typing import NamedTuple
 from hil.plant import (
     PlantParams,
     advance_slips,
+    decreasing_root,
     muscle_force_n,
     slip_friction,
     valve_step,
@@ -126,18 +127,7 @@ def _angle_balance(params: JointParams, x: JointState, pa: float, pb: float, dam
         slope = r * r * (dfa - ka) + r * r * (dfb - kb) - params.return_stiffness_nm_per_rad - viscous
         return torque, slope
 
-    angle = min(max(x.angle_rad, lo), hi)
-    for _ in range(60):
-        value, slope = imbalance(angle)
-        if value > 0.0:
-            lo = angle
-        else:
-            hi = angle
-        if abs(value) < 1e-10 or hi - lo < 1e-13:
-            break
-        step = angle - value / slope if slope < 0.0 else 0.5 * (lo + hi)
-        angle = step if lo < step < hi else 0.5 * (lo + hi)
-    return angle
+    return decreasing_root(imbalance, x.angle_rad, lo, hi, value_tol=1e-10, bracket_tol=1e-13)
 
 
 def joint_update(t: float, x: JointState, u_a: float, u_b: float, params: JointParams) -> JointState:

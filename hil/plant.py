@@ -26,6 +26,7 @@ spring and a 3.5 kg load.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -206,18 +207,34 @@ def _balance(params: PlantParams, t: float, x: PlantState, pressure_bar: float, 
         value = force - weight - params.spring_n_per_m * position - friction - viscous * move
         return value, slope - params.spring_n_per_m - viscous
 
-    position = min(max(x_prev, lo), hi)
-    for _ in range(60):
-        value, slope = imbalance(position)
+    return decreasing_root(imbalance, x_prev, lo, hi, value_tol=1e-9, bracket_tol=1e-12)
+
+
+def decreasing_root(
+    f: Callable[[float], tuple[float, float]],
+    start: float,
+    lo: float,
+    hi: float,
+    *,
+    value_tol: float,
+    bracket_tol: float,
+    iterations: int = 60,
+) -> float:
+    """The root of ``f`` (value, slope), decreasing on [lo, hi], by safeguarded Newton: a Newton
+    step when the slope is negative and the step stays inside the bracket, else bisection. Used
+    by every force or torque balance of the HIL (single muscle, antagonistic joint)."""
+    x = min(max(start, lo), hi)
+    for _ in range(iterations):
+        value, slope = f(x)
         if value > 0.0:
-            lo = position
+            lo = x
         else:
-            hi = position
-        if abs(value) < 1e-9 or hi - lo < 1e-12:
+            hi = x
+        if abs(value) < value_tol or hi - lo < bracket_tol:
             break
-        step = position - value / slope if slope < 0.0 else 0.5 * (lo + hi)
-        position = step if lo < step < hi else 0.5 * (lo + hi)
-    return position
+        step = x - value / slope if slope < 0.0 else 0.5 * (lo + hi)
+        x = step if lo < step < hi else 0.5 * (lo + hi)
+    return x
 
 
 def update(t: float, x: PlantState, u: float, params: PlantParams) -> PlantState:
