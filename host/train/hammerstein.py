@@ -27,6 +27,7 @@ coefficients, so the graph's shapes do not depend on the chosen orders.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -143,7 +144,7 @@ class Hammerstein:
 def train_hammerstein(
     u: NDArray[np.float64],
     y: NDArray[np.float64],
-    split_fn: object,
+    split_fn: Callable[[int], Split],
     *,
     seed: int = 0,
     epochs: int = 60,
@@ -157,7 +158,7 @@ def train_hammerstein(
     # MPI on the whole record, as ``pmactl fit --model mpi`` (the baseline it is compared with);
     # the tail is held out from the net's training and the ARX fit only
     operator = identify_mpi(u, y)
-    split: Split = split_fn(operator.start_index)  # type: ignore[operator]
+    split = split_fn(operator.start_index)
     n_all = operator.operator.simulate(u[split.start :], operator.start_branch)
     u_all, y_all = u[split.start :], y[split.start :]
     n_train = split.tail - split.start

@@ -24,6 +24,7 @@ best weights on it are kept (early stopping with ``patience``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -115,7 +116,7 @@ def _window_starts(length: int, window: int, rng: np.random.Generator) -> NDArra
 def train_lstm_narmax(
     u: NDArray[np.float64],
     y: NDArray[np.float64],
-    split_fn: object,
+    split_fn: Callable[[int], Split],
     *,
     seed: int = 0,
     epochs: int = 60,
@@ -132,7 +133,7 @@ def train_lstm_narmax(
     # the operator is identified on the whole record, as ``pmactl fit`` would (the baselines it is
     # compared with see the same data); the tail is held out from the net's training only
     operator = identify_tanh_pi(u, y)
-    split: Split = split_fn(operator.start_index)  # type: ignore[operator]
+    split = split_fn(operator.start_index)
     n_all = operator.operator.simulate(u[split.start :], operator.start_branch)
     u_all, y_all = u[split.start :], y[split.start :]
     n_train = split.tail - split.start
