@@ -105,3 +105,30 @@ def test_safe_is_left_only_by_an_explicit_reset():
     assert supervisor.state is State.ARMED
     with pytest.raises(RuntimeError, match="cannot arm from armed"):
         supervisor.arm(Readings(40.0))
+
+
+def test_a_device_that_fails_to_vent_does_not_stop_the_others_venting():
+    """Drivers arrive by entry point: one whose vent() raises must not keep the valve DAC
+    energised, and the failure is recorded, not raised."""
+    from edge.runtime.frame import frame_layout
+    from edge.runtime.rig import open_rig
+    from tests.edge_helpers import rig_config
+
+    config = rig_config()
+    rig = open_rig(config, frame_layout(config.rig), lockstep=True)
+    vented: list[str] = []
+    first, *others = sorted(rig.devices, key=lambda d: d.name)
+
+    def broken_vent() -> None:
+        raise OSError(5, "line request lost")
+
+    first.vent = broken_vent  # type: ignore[method-assign]
+    for device in others:
+        original = device.vent
+        device.vent = lambda d=device, o=original: (vented.append(d.name), o())[1]  # type: ignore[method-assign]
+    try:
+        rig.vent()
+        assert sorted(vented) == sorted(d.name for d in others) and others
+        assert "vent failed" in rig.errors[first.name]
+    finally:
+        rig.close()  # vents again (the broken one still raising inside), never raises

@@ -95,9 +95,14 @@ class Rig:
                 self._pending_errors[device.name] = self._record(device, exc)
 
     def vent(self) -> None:
-        """Best effort safe state: line outputs (valve enable) first, then the DACs."""
+        """Best effort safe state: line outputs (valve enable) first, then the DACs. Never raises:
+        a device that fails to vent is recorded in ``errors`` and the next one is still vented
+        (drivers arrive by entry point, so "vent never raises" is not something to trust)."""
         for device in sorted(self.devices, key=lambda d: getattr(type(d), "output_kind", None) != LINE_OUT):
-            device.vent()
+            try:
+                device.vent()
+            except Exception as exc:  # noqa: BLE001 - every valve must get its vent call
+                self.errors[device.name] = f"vent failed: {exc}"
 
     def close(self) -> None:
         """Vent, then release every device and bus (each tried even if one fails)."""

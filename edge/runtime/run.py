@@ -239,9 +239,13 @@ class EdgeRuntime:
 
     def run(self, duration_s: float | None = None) -> RunSummary:
         """Run until ``duration_s`` [s] (default: the reference's length, else until stopped)."""
-        check_duration(duration_s, self.settle_s, self.reference)
-        duration = duration_s if duration_s is not None else self.reference.duration_s
         config, rig = self.config, self.rig
+        try:
+            check_duration(duration_s, self.settle_s, self.reference)
+        except BaseException:
+            rig.close()  # a refused run still leaves the rig vented and released
+            raise
+        duration = duration_s if duration_s is not None else self.reference.duration_s
         if duration is None and rig.lockstep:
             rig.close()
             raise DataError(f"{config.source}: an endless reference on a lockstep rig never stops; give --duration")
@@ -294,7 +298,10 @@ class EdgeRuntime:
             scheduler.start()
             self._loop(scheduler, duration, telemetry, watchdog, errors, faults)
         finally:
-            rig.close()  # vents first
+            try:
+                rig.close()  # vents first; never raises out of vent, but a driver's close might
+            except Exception as exc:  # noqa: BLE001 - the run's own error and summary come first
+                faults.append(f"rig close failed: {exc}")
             if frozen:
                 gc.unfreeze()
             if watchdog:
