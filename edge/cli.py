@@ -124,12 +124,15 @@ def telemetry(args: argparse.Namespace) -> int:
     from edge.runtime.telemetry_read import read_telemetry
 
     for option, path, suffixes in (
-        ("--csv", args.csv, None),
+        ("--csv", args.csv, (".csv",)),
         ("--mcap", args.mcap, (".mcap",)),
         ("--plot", args.plot, (".png", ".pdf", ".svg")),
     ):
         if path:
             _check_output(Path(path), option, suffixes)  # before reading: no work lost to a bad path
+    outputs = [Path(p) for p in (args.csv, args.mcap, args.plot) if p]
+    if len(set(map(str, outputs))) < len(outputs):
+        raise DataError("--csv, --mcap and --plot name the same file; give each its own")
     record = read_telemetry(args.file)
     if args.csv:
         _write_csv(record, Path(args.csv))
@@ -158,6 +161,8 @@ def telemetry(args: argparse.Namespace) -> int:
 
 def _check_output(path: Path, option: str, suffixes: tuple[str, ...] | None) -> None:
     """One line if ``path`` cannot be written as ``option``'s output file."""
+    if (path.exists() and not path.is_dir()) or path.is_symlink():
+        raise DataError(f"{option} {path}: exists, and an export never overwrites a file; choose a new name")
     if suffixes and path.suffix.lower() not in suffixes:
         raise DataError(
             f"{option} {path}: cannot write the format '{path.suffix}'; end the name in {' or '.join(suffixes)}"

@@ -308,6 +308,20 @@ def test_edge_telemetry_outputs_are_checked_before_reading(demo, tmp_path, optio
     assert one_line_error(run_pmactl("edge", "telemetry", str(telemetry), option, str(tmp_path / target)), message)
 
 
+def test_edge_telemetry_export_never_overwrites_a_file(demo, tmp_path):
+    """Not the recording itself (a reviewer replaced a run's telemetry with its CSV this way),
+    not any other existing file."""
+    telemetry = tmp_path / "run.pmt"
+    telemetry.write_bytes((demo[2] / "tracking-pid.pmt").read_bytes())
+    before = telemetry.read_bytes()
+    notes = tmp_path / "notes.csv"
+    notes.write_text("mine\n")
+    for target in (telemetry, notes):
+        result = run_pmactl("edge", "telemetry", str(telemetry), "--csv", str(target))
+        assert one_line_error(result, "exists, and an export never overwrites a file")
+    assert telemetry.read_bytes() == before and notes.read_text() == "mine\n"
+
+
 def test_hil_record_shows_no_progress_in_a_pipe(tmp_path):
     result = run_pmactl("hil", "record", "--scenario", "sines", "--duration", "2", "--out", str(tmp_path / "r.csv"))
     assert result.returncode == 0 and result.stderr == "" and (tmp_path / "r.csv").exists()
