@@ -308,6 +308,20 @@ def test_edge_telemetry_outputs_are_checked_before_reading(demo, tmp_path, optio
     assert one_line_error(run_pmactl("edge", "telemetry", str(telemetry), option, str(tmp_path / target)), message)
 
 
+def test_demo_refuses_a_folder_it_did_not_make(tmp_path):
+    (tmp_path / "thesis.tex").write_text("mine")
+    result = run_pmactl("demo", "--out", str(tmp_path), "--json")
+    assert one_line_error(result, "holds files the demo did not write")
+    assert [p.name for p in tmp_path.iterdir()] == ["thesis.tex"]
+
+
+def test_demo_reuses_its_own_folder(demo):
+    from host.cli.demo import DEMO_MARKER, demo_directory
+
+    out = demo[2]
+    assert (out / DEMO_MARKER).is_file() and demo_directory(str(out)) == out  # a second demo may write here
+
+
 def test_edge_telemetry_export_never_overwrites_a_file(demo, tmp_path):
     """Not the recording itself (a reviewer replaced a run's telemetry with its CSV this way),
     not any other existing file."""

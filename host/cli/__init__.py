@@ -50,7 +50,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--out",
         metavar="DIR",
         default="pmactl-demo",
-        help="write the bundles and figures here (default: ./pmactl-demo, replaced on each run)",
+        help="write the bundles and figures here (default: ./pmactl-demo; new, empty, or an earlier demo's folder)",
     )
     demo.add_argument("--json", action="store_true", help="print the comparison as JSON (no progress lines)")
     demo.set_defaults(run=_lazy("host.cli.demo"))

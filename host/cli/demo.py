@@ -9,9 +9,10 @@ tracking test, PID alone, PID + inverse-hysteresis feedforward, and PID + feedfo
 neural correction ``pmactl train --model correction`` adds to the bundle (trained here on the
 emulated rig's working range, see :mod:`host.train.correction`).
 
-Everything goes to ``--out`` (default ``./pmactl-demo``, written over on each run): a bundle per
-model, the two tracking runs' telemetry and the figures ``loops.png`` (measured vs model loops)
-and ``tracking.png`` (the closed loop, all three controllers). Each result is printed as it finishes.
+Everything goes to ``--out`` (default ``./pmactl-demo``; new, empty, or an earlier demo's
+folder, see :func:`demo_directory`): a bundle per model, the three tracking runs' telemetry and
+the figures ``loops.png`` (measured vs model loops) and ``tracking.png`` (the closed loop, all
+three controllers). Each result is printed as it finishes.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from edge.runtime.config import load_config
 from edge.runtime.run import EdgeRuntime
 from edge.runtime.telemetry import read_telemetry
 from hil.configs import HIL_RIG_CONFIG
-from host.cli.outputs import check_output
+from host.cli.outputs import OutputPathError, check_output
 from host.data import Measurement, load_measurement
 from host.demo_figures import plot_loops, plot_tracking
 from host.examples import example_path
@@ -111,9 +112,26 @@ def tracking_figure(out: Path, loop: list[dict[str, object]], reachable: tuple[f
     return plot_tracking(out / "tracking.png", runs, SETTLE_S, reachable, rms)
 
 
-def run(args: argparse.Namespace) -> int:
-    out = check_output(args.out, "--out", kind="dir")
+DEMO_MARKER = ".pmactl-demo"  # written into --out: the demo replaces only its own files in a folder it made
+
+
+def demo_directory(path: str) -> Path:
+    """``--out`` if the demo may write there: new, empty, or made by an earlier demo (it holds
+    :data:`DEMO_MARKER`). Anything else is the user's, and the demo would replace figures and
+    telemetry in it, so it is refused with one line."""
+    out = check_output(path, "--out", kind="dir")
+    if out.is_dir() and any(out.iterdir()) and not (out / DEMO_MARKER).is_file():
+        raise OutputPathError(
+            f"--out {out}: holds files the demo did not write; give a new or empty directory "
+            f"(an earlier demo's folder has {DEMO_MARKER} in it)"
+        )
     out.mkdir(exist_ok=True)
+    (out / DEMO_MARKER).write_text("written by pmactl demo; the next demo may replace what is here\n")
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    out = demo_directory(args.out)
     say: Callable[[str], None] = (lambda line: None) if args.json else (lambda line: print(line, flush=True))
     train = load_measurement(example_path("train"))
     test = load_measurement(example_path("test"))
