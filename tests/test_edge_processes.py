@@ -93,12 +93,12 @@ def test_a_dead_daq_ends_the_run_in_the_safe_state_in_lockstep(bundle, lockstep_
     assert 2.0 < t[-1] <= 2.0 + 0.010
 
 
-def blocked_python(code: str, cwd: Path) -> subprocess.CompletedProcess:
-    """Run ``code`` in a fresh interpreter where importing any of BLOCKED fails."""
+def blocked_python(code: str, cwd: Path, blocked: tuple[str, ...] = BLOCKED) -> subprocess.CompletedProcess:
+    """Run ``code`` in a fresh interpreter where importing any of ``blocked`` fails."""
     guard = textwrap.dedent(
         f"""
         import importlib.abc, sys
-        BLOCKED = {BLOCKED!r}
+        BLOCKED = {blocked!r}
         class Block(importlib.abc.MetaPathFinder):
             def find_spec(self, name, path, target=None):
                 if name.split(".")[0] in BLOCKED:
@@ -127,6 +127,27 @@ print("ok")
     result = blocked_python(code, tmp_path)
     assert result.returncode == 0 and result.stdout.strip().endswith("ok"), result.stderr
     assert (tmp_path / "t.csv").stat().st_size > 0 and (tmp_path / "t.mcap").stat().st_size > 0
+
+
+# what an SBC with only pmactl[edge] lacks: the host extra's packages (the pmactl package itself,
+# host/ included, is installed there; its console script is host.cli:main)
+NOT_ON_THE_SBC = ("hil", "scipy", "torch", "matplotlib", "ray", "onnx", "tqdm", "asyncssh", "models_export")
+
+
+def test_the_pmactl_console_script_runs_edge_commands_on_an_edge_only_install(tmp_path, bundle):
+    record = tmp_path / "t.pmt"
+    runtime(bundle, telemetry_path=record).run(0.2)
+    code = f"""
+from host.cli import main
+assert main(["edge", "telemetry", {str(record)!r}, "--csv", "t.csv"]) == 0
+assert main(["edge", "run", "--config", "missing.toml", "--bundle", "b"]) == 2  # one line, no traceback
+leaked = sorted(m for m in sys.modules if m.split(".")[0] in BLOCKED)
+assert not leaked, leaked
+print("ok")
+"""
+    result = blocked_python(code, tmp_path, NOT_ON_THE_SBC)
+    assert result.returncode == 0 and result.stdout.strip().endswith("ok"), result.stderr
+    assert (tmp_path / "t.csv").stat().st_size > 0
 
 
 @pytest.fixture
