@@ -177,7 +177,7 @@ def check_out(matrix: Matrix, out: Path) -> None:
     if changed:
         raise ConfigError(
             f"{out}: holds the results of another matrix ({saved}: {', '.join(changed)} differ from "
-            f"{matrix.path}); use another --out, or resume with {saved}"
+            f"{matrix.path}); use another --out, or run the matrix that made them (a copy is {saved})"
         )
 
 
