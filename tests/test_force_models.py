@@ -99,3 +99,27 @@ def test_cli_force_on_an_isotonic_hil_recording(tmp_path, capsys):
     assert out["rmse_n"] < 40.0 and out["force_column"] == "force"
     assert main(["identify", "force", str(path), "--model", "tondu-lopez"]) == 2
     assert "--rest-length-mm" in capsys.readouterr().err
+
+
+def _small_force_csv(path):  # noqa: ANN001, ANN202
+    p, eps, force = sarosi_data(3)
+    rows = "".join(f"{a},{400 * b},{c}\n" for a, b, c in zip(p, eps, force))
+    path.write_text("p,y,force\n" + rows)
+    return path
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "0", "-400"])
+def test_a_rest_length_that_is_not_a_finite_positive_number_is_named(tmp_path, capsys, value):
+    path = _small_force_csv(tmp_path / "f.csv")
+    assert main(["identify", "force", str(path), "--model", "sarosi", f"--rest-length-mm={value}"]) == 2
+    err = capsys.readouterr().err
+    assert "--rest-length-mm" in err and "must be a finite positive number" in err and "pass --rest" not in err
+
+
+@pytest.mark.parametrize("value", ["-3", "0", "nan"])
+def test_a_radius_that_is_not_a_finite_positive_number_is_refused(tmp_path, capsys, value):
+    path = _small_force_csv(tmp_path / "f.csv")
+    argv = ["identify", "force", str(path), "--model", "tondu-lopez", "--rest-length-mm", "400"]
+    assert main([*argv, f"--radius-mm={value}"]) == 2
+    err = capsys.readouterr().err
+    assert "--radius-mm" in err and "must be a finite positive number" in err

@@ -66,3 +66,14 @@ def test_real_cylinder_loops(shared_data, name, capsys):
     assert out["heldout_rmse_pct_range"] < 10.0
     # friction loops: the elements carry a real break force
     assert sum(out["break_force_n"]) > 1.0
+
+
+def test_more_elements_than_the_data_can_identify_are_refused_with_the_limit(tmp_path, capsys):
+    x, force, _ = synthetic(4)
+    path = tmp_path / "short.csv"
+    path.write_text("x,force\n" + "".join(f"{a},{b}\n" for a, b in zip(x[:50], force[:50])))
+    assert main(["identify", "maxwell-slip", str(path), "--elements", "1000"]) == 2
+    err = capsys.readouterr().err
+    # 50 samples: 35 in the fit window, 2 of them warm-up, 33 for 2 + 2 N parameters -> N <= 15
+    assert "--elements 1000" in err and "at most 15 element(s)" in err and "--elements 15 or fewer" in err
+    assert main(["identify", "maxwell-slip", str(path), "--elements", "15", "--json"]) == 0

@@ -106,3 +106,47 @@ def test_lstm_narmax_learns_what_its_operator_misses(tmp_path):
 def test_zero_epochs_is_refused(rate_records, capsys):
     assert main(["train", "--model", "lstm-narmax", "--train", str(rate_records[0]), "--epochs", "0"]) == 2
     assert "--epochs 0 must be at least 1" in capsys.readouterr().err
+
+
+@pytest.fixture
+def no_training(monkeypatch):
+    """Training fails the test if it starts: these checks must come before any of it."""
+
+    def refuse(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        raise AssertionError("training started before --save was checked")
+
+    monkeypatch.setattr("host.train.train_model", refuse)
+    monkeypatch.setattr("host.train.correction.train_correction_into", refuse)
+
+
+def test_save_under_a_missing_folder_is_refused_before_training_and_creates_nothing(
+    rate_records, tmp_path, capsys, no_training
+):
+    target = tmp_path / "typo" / "models" / "ham"
+    assert main(["train", "--model", "hammerstein", "--train", str(rate_records[0]), "--save", str(target)]) == 2
+    err = capsys.readouterr().err
+    assert "does not exist" in err and "mkdir -p" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "typo").exists()
+
+
+def test_save_into_a_folder_holding_a_model_is_refused_before_training_and_keeps_it(
+    rate_records, tmp_path, capsys, no_training
+):
+    old = tmp_path / "ham"
+    old.mkdir()
+    (old / "model.json").write_text('{"kind": "earlier"}\n')
+    (old / "step.onnx").write_bytes(b"earlier")
+    assert main(["train", "--model", "lstm-narmax", "--train", str(rate_records[0]), "--save", str(old)]) == 2
+    err = capsys.readouterr().err
+    assert "already holds a model" in err and "choose a new folder" in err
+    assert (old / "model.json").read_text() == '{"kind": "earlier"}\n'
+    assert (old / "step.onnx").read_bytes() == b"earlier"
+
+
+def test_correction_save_is_checked_before_the_bundle_is_changed(rate_records, tmp_path, capsys, no_training):
+    target = tmp_path / "missing" / "curve"
+    code = main(
+        ["train", "--model", "correction", "--train", str(rate_records[0]), "--bundle", str(tmp_path / "b"),
+         "--save", str(target)]
+    )  # fmt: skip
+    assert code == 2 and "does not exist" in capsys.readouterr().err

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -19,9 +20,19 @@ def _header(path: str) -> list[str]:
         return [h.strip() for h in handle.readline().split(",")]
 
 
+def _positive_mm(value: float | None, option: str, what: str) -> None:
+    """Refuse a length option that is NaN, infinite, zero or negative (``None``: not given, fine)."""
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise DataError(f"{option} {value}: must be a finite positive number ({what} in mm)")
+
+
 def run_force(args: argparse.Namespace) -> int:
     from host.identify.force import FORCE_MODELS
 
+    if args.rest_length_mm is None:
+        raise DataError("pass --rest-length-mm (the muscle's rest length; contraction ratio = y / rest length)")
+    _positive_mm(args.rest_length_mm, "--rest-length-mm", "the muscle's rest length")
+    _positive_mm(args.radius_mm, "--radius-mm", "the muscle's inner radius")
     try:
         header = _header(args.data)
     except OSError as exc:
@@ -29,8 +40,6 @@ def run_force(args: argparse.Namespace) -> int:
     pressure_column = "p" if "p" in header else "u"
     force_column = "force" if "force" in header else "load"
     columns = read_columns(args.data, [pressure_column, "y", force_column])
-    if args.rest_length_mm is None or not args.rest_length_mm > 0:
-        raise DataError("pass --rest-length-mm (the muscle's rest length; contraction ratio = y / rest length)")
     force = columns[force_column] * (GRAVITY if force_column == "load" else 1.0)
     eps = columns["y"] / args.rest_length_mm
     kwargs = {"radius_m": args.radius_mm / 1e3} if args.model == "tondu-lopez" and args.radius_mm else {}
@@ -59,11 +68,35 @@ def run_force(args: argparse.Namespace) -> int:
     return 0
 
 
+def identifiable_elements(samples: int) -> int:
+    """The most Maxwell-slip elements ``samples`` can identify.
+
+    Each element has two parameters (stiffness, break force), the model two more (offset, linear
+    term), and the held-out score fits them on the first 70 % after the warm-up: that window must
+    hold at least as many samples as there are parameters.
+    """
+    from host.identify.maxwell_slip import TRAIN_SHARE, WARMUP
+
+    fitted = int(TRAIN_SHARE * samples) - int(WARMUP * samples)
+    return max(0, (fitted - 2) // 2)
+
+
 def run_maxwell_slip(args: argparse.Namespace) -> int:
     from host.identify.maxwell_slip import despike, select_and_fit
 
     columns = read_columns(args.data, [args.position_column, args.force_column])
-    result = select_and_fit(columns[args.position_column], columns[args.force_column], args.elements)
+    samples = columns[args.position_column].size
+    limit = identifiable_elements(samples)
+    if args.elements is not None and args.elements > limit:
+        raise DataError(
+            f"--elements {args.elements}: {samples} samples can identify at most {limit} element(s) (2 parameters "
+            f"each, fitted on the first 70 %); pass --elements {limit} or fewer, or record more data"
+        )
+    if limit < 1:
+        raise DataError(f"{args.data}: {samples} samples are too few to identify one element; record more data")
+    result = select_and_fit(
+        columns[args.position_column], columns[args.force_column], args.elements, max_elements=min(8, limit)
+    )
     if args.plot:
         from host.identify.maxwell_slip import plot_loops
 

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from edge.errors import DataError
+from host.cli.outputs import OutputPathError, check_output
 from host.data import load_measurement
 
 DEFAULT_EPOCHS = {"hammerstein": 60, "lstm-narmax": 150, "correction": 300}
@@ -51,6 +52,8 @@ def run(args: argparse.Namespace) -> int:
         raise DataError(f"--epochs {args.epochs} must be at least 1")
     if args.epochs is None:
         args.epochs = DEFAULT_EPOCHS[args.model]
+    if args.save:
+        _check_save(args.save)  # before training: a bad path costs nothing and nothing is half-written
     if args.model == "correction":
         return _run_correction(args)
     if args.bundle:
@@ -108,6 +111,15 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_save(path: str) -> None:
+    """Refuse a --save folder that cannot be written, has no parent, or already holds a model."""
+    check_output(path, "--save", kind="dir")
+    if (Path(path) / "model.json").exists():
+        raise OutputPathError(
+            f"--save {path}: already holds a model (model.json); choose a new folder, or move the old model away first"
+        )
+
+
 def _run_correction(args: argparse.Namespace) -> int:
     from host.train.correction import train_correction_into
 
@@ -116,6 +128,7 @@ def _run_correction(args: argparse.Namespace) -> int:
     records = [load_measurement(path) for path in args.train]
     result = train_correction_into(args.bundle, records, seed=args.seed, epochs=args.epochs, quiet=args.json)
     if args.save:
+        Path(args.save).mkdir(exist_ok=True)
         result.curve.save_png(Path(args.save) / "training_curve.png", "correction training")
     if args.json:
         print(json.dumps(result.as_dict()))

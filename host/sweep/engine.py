@@ -13,19 +13,22 @@ import math
 import shutil
 import sys
 import time
+import tomllib
 from collections import deque
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+from edge.errors import ConfigError
 from host.sweep.backends import Backend
-from host.sweep.journal import Journal, write_table, write_text
+from host.sweep.journal import JOURNAL, Journal, write_table, write_text
 from host.sweep.matrix import Cell, Matrix
 from host.sweep.report import cell_row, markdown_summary, table_columns
 
 POLL_S = 0.5
 REWRITE_EVERY_S = 2.0
+SAVED_MATRIX = "matrix.sweep.toml"
 
 
 @dataclass
@@ -64,7 +67,9 @@ def run_sweep(
 ) -> SweepResult:
     """Run every cell of ``matrix`` not finished in ``out`` yet; write the table and summary there."""
     started = time.monotonic()
+    check_out(matrix, out)
     with Journal(out) as journal:
+        check_out(matrix, out)  # again under the lock: another sweep may have started here meanwhile
         _save_matrix(matrix, out)
         finished = journal.finished()
         todo = [
@@ -148,10 +153,53 @@ def _rows(matrix: Matrix, journal: Journal) -> list[dict[str, Any]]:
     return [cell_row(matrix, c, finished[c.key]) for c in matrix.cells if c.key in finished]
 
 
+def check_out(matrix: Matrix, out: Path) -> None:
+    """Refuse an ``out`` whose files this sweep would overwrite: not a sweep's folder, or another matrix's.
+
+    A sweep folder is one with a journal (``cells.jsonl``); its saved ``matrix.sweep.toml`` must
+    have the same kind, axes and steps as ``matrix`` (thresholds, values and the like may change:
+    the table is re-scored and changed cells run again). Raises :class:`ConfigError`.
+    """
+    if not out.is_dir():
+        return  # missing: created by the journal; a file there: the journal names it
+    others = [p for p in out.iterdir() if p.name != ".lock" and not _same_file(p, matrix.path)]
+    if not others:
+        return
+    if not (out / JOURNAL).exists():
+        raise ConfigError(
+            f"{out}: is not empty and holds no sweep ({JOURNAL}); choose a new or empty --out so nothing there is "
+            "overwritten"
+        )
+    saved = out / SAVED_MATRIX
+    if not saved.exists() or _same_file(saved, matrix.path):
+        return
+    changed = [key for key in ("kind", "axes", "steps", "before") if _shape(saved, key) != _shape(matrix.path, key)]
+    if changed:
+        raise ConfigError(
+            f"{out}: holds the results of another matrix ({saved}: {', '.join(changed)} differ from "
+            f"{matrix.path}); use another --out, or run the matrix that made them (a copy is {saved})"
+        )
+
+
+def _shape(path: Path, key: str) -> object:
+    """One top-level table of a matrix file as parsed TOML (``None`` if absent or unreadable)."""
+    try:
+        return tomllib.loads(path.read_text()).get(key)
+    except (OSError, tomllib.TOMLDecodeError):
+        return None
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.samefile(b)
+    except OSError:
+        return False
+
+
 def _save_matrix(matrix: Matrix, out: Path) -> None:
     """A copy of the matrix beside its results (what produced this table)."""
     try:
-        shutil.copyfile(matrix.path, out / "matrix.sweep.toml")
+        shutil.copyfile(matrix.path, out / SAVED_MATRIX)
     except shutil.SameFileError:
         pass
 

@@ -111,7 +111,7 @@ def save_model(trained: Trained, directory: str | Path, record: dict[str, object
 
     model = trained.model
     directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
+    directory.mkdir(exist_ok=True)  # its parent must exist: a typo should not grow a tree
     _, spec = export_step(model.kind, model.weights, directory / "step.onnx")
     operator = model.operator.operator
     write_table(operator.model.compile(), directory / "operator.npz")
