@@ -49,6 +49,9 @@ MIN_SAMPLES = 400
 PREISACH_LEVELS = 16
 MAX_WORK_SAMPLES = 30_000
 BASELINE_OUTLIER = 2.5
+# the dead-time signature at or below this p asks for a dead time screened jointly with the
+# shorter actuator lags (the baseline's lag may have absorbed it); cheaper than always doing so
+JOINT_DELAY_P = 0.2
 # a hold's first second(s) are the baseline's own settling, not drift
 SETTLE_S = 1.0
 LARGE_PROBLEM_CELLS = 20_000_000  # rows x Everett cells above which a second BLAS thread pays
@@ -207,6 +210,22 @@ def _diagnose(
     scored_rows = 0
     with _progress(1 + folds * (1 + len(CAUSES)), progress) as bar:
         ctx.lag_s = choose_actuator_lag(ctx)
+        ctx.train = np.ones(n, dtype=bool)
+        baseline_full = fit_baseline(ctx)
+        found = signatures(
+            ctx.y - baseline_full.prediction,
+            ctx.y,
+            baseline_full.prediction,
+            ctx.u,
+            ctx.t,
+            ctx.x,
+            ctx.branch,
+            ctx.extras,
+            ctx.dt,
+            settle_s=SETTLE_S + 5.0 * ctx.lag_s,
+        )
+        delay_signature = found.get("transport_delay")
+        ctx.joint_delay = delay_signature is not None and delay_signature.p_value <= JOINT_DELAY_P
         bar.update()
         for held in masks:
             ctx.train = ~held
@@ -253,19 +272,7 @@ def _diagnose(
         )
     noise = noise_floor(ctx.y)
     ctx.train = np.ones(n, dtype=bool)
-    baseline_full = fit_baseline(ctx)
-    found = signatures(
-        ctx.y - baseline_full.prediction,
-        ctx.y,
-        baseline_full.prediction,
-        ctx.u,
-        ctx.t,
-        ctx.x,
-        ctx.branch,
-        ctx.extras,
-        ctx.dt,
-        settle_s=SETTLE_S + 5.0 * ctx.lag_s,
-    )
+    baseline_full = fit_baseline(ctx)  # again: the folds left ctx.x at their own fits
     verdict = with_signatures(choose(scores, noise), scores, found, noise)
     cause = verdict.cause
     extended_full = extension(ctx, cause) if cause != "none" else None
