@@ -94,6 +94,7 @@ class Diagnosis:
             "gain": self.gain,
             "holdout": self.holdout,
             "extended_model": self.extended_model,
+            "signatures": self.evidence.get("signatures", {}),
             "notes": self.notes,
         }
 
