@@ -15,9 +15,14 @@ rows. A candidate passes when
 * an observed cause (load, temperature) also beats ``slow_drift``, the same flexibility in time
   alone, fold by fold by the same threshold: a slowly wandering column soaks up any drift.
 
-Among the candidates that pass the highest mean gain wins. The constants were calibrated on the
-effect-free records of the tuning plants (tests/plants, ``bench/diagnose_scorecard.py --set
-tuning``); the false-alarm rate they give on records never tuned on is in the README.
+Among the candidates that pass the highest mean gain wins. :func:`with_signatures` then applies
+the two-stage rule: a residual signature (:mod:`host.diagnose.signatures`) at p <=
+:data:`SIGNATURE_ALPHA` nominates its cause and the held-out folds confirm it (:func:`unconfirmed`),
+and a held-out verdict whose own signature the record shows at p > :data:`VETO_P` is withdrawn.
+
+The constants were calibrated on the effect-free records of the tuning plants (tests/plants,
+``bench/diagnose_scorecard.py --set tuning``); the false-alarm rate they give on records never
+tuned on is in the README.
 """
 
 from __future__ import annotations
