@@ -80,7 +80,7 @@ def test_a_dead_time_shifts_every_reversal_and_a_matching_simulation_shows_none(
 def test_a_column_that_shapes_the_residual_beyond_a_ramp_is_found_and_an_unrelated_one_is_not():
     rng = np.random.default_rng(3)
     n = 6000
-    t = np.arange(n) * DT
+    t = np.arange(n, dtype=np.float64) * DT
     x = np.sin(2 * np.pi * 0.3 * t)
     branch = np.sign(np.cos(2 * np.pi * 0.3 * t))
     load = np.repeat(rng.uniform(0, 8, 6), n // 6)
