@@ -45,6 +45,8 @@ def score(case_list: list[Case]) -> list[dict[str, object]]:
             "confidence": d.confidence,
             "cpu_s": cpu,
             "samples": len(m),
+            "decided_by": d.decided_by,
+            "signature_p": d.confidence.get("signature_p", {}),
         }
         rows.append(row)
         ok = "ok " if d.cause == case.effect else "MISS" if case.effect != "none" else "FALSE"
@@ -80,6 +82,13 @@ def table(title: str, rows: list[dict[str, object]]) -> None:
         f"{np.median(gains) if gains else float('nan'):.1%}; "
         f"CPU median {np.median(cpu):.1f} s, max {max(cpu):.1f} s"
     )
+    evidence: dict[str, list[int]] = defaultdict(lambda: [0, 0])  # named right, named wrong
+    for r in rows:
+        if r["verdict"] != "none":
+            kind = str(r["decided_by"]).split(" (")[0].split(":")[0]
+            evidence[kind][0 if r["verdict"] == r["effect"] else 1] += 1
+    for kind, (right, wrong_count) in evidence.items():
+        print(f"decided by {kind}: {right} right, {wrong_count} wrong")
     wrong = [r for r in effect_rows if r["verdict"] != r["effect"]]
     for r in wrong + false:
         print(f"  wrong: {r['case']} -> {r['verdict']}")

@@ -90,6 +90,9 @@ def test_json_carries_the_verdict_its_confidence_and_the_report_is_written(tmp_p
     assert set(result["scores"]) == set(CAUSES)
     assert {"over_threshold", "over_runner_up", "runner_up"} <= set(result["confidence"])
     assert result["cause"] in (*CAUSES, "none")
+    # a mixed protocol has reversals: the dead-time signature is always reported, with its p-value
+    assert 0.0 < result["signatures"]["transport_delay"]["p_value"] <= 1.0
+    assert set(result["confidence"]["signature_p"]) == set(result["signatures"])
     assert result["extended_model"]["name"] in (result["cause"], "baseline (no extension)")
     for name in ("report.md", "loops.png", "residuals.png", "scores.png"):
         assert (tmp_path / "report" / name).stat().st_size > 1000

@@ -11,6 +11,7 @@ import json
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any, cast
 
 from edge.errors import DataError
 
@@ -76,6 +77,9 @@ def run(args: argparse.Namespace) -> int:
     for cause, gains in result.fold_gains.items():
         folds = " ".join(f"{g:+.1%}" for g in gains)
         say(f"  {cause:<18} {result.scores[cause]:>+7.1%}  {folds}")
+    found = cast("dict[str, dict[str, Any]]", result.evidence.get("signatures") or {})
+    for cause, sig in found.items():
+        say(f"  signature {cause:<18} p = {sig['p_value']:.2g}: {sig['detail']}")
     for note in measurement.notes + result.notes:
         say(f"  note: {note}")
     try:

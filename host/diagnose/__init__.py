@@ -5,5 +5,7 @@
 ``folds``: held-out blocks, the in-range rows each fold is scored on, the noise floor.
 ``decide``: the calibrated verdict and its confidence. ``run``: one record. ``crossrun``: a
 model identified on one record checked on others. ``evidence``: residual diagnostics.
+``signatures``: surrogate-calibrated residual tests that nominate a cause (hold drift,
+reversal lag, column beyond a time ramp).
 ``report``: Markdown + figures.
 """

@@ -27,6 +27,8 @@ CAUSES = ("rate_dependence", "creep", "transport_delay", "load_dependence", "tem
 OBSERVED_CAUSES = ("load_dependence", "temperature_drift")
 CREEP_TAUS_S = (2.0, 5.0, 10.0, 20.0, 40.0, 80.0)
 MIN_DELAY_SAMPLES = 3
+# dead times screened jointly with the shorter actuator lags (when a signature asks for it)
+JOINT_DELAYS_S = (0.05, 0.1, 0.16, 0.2, 0.3)
 DELAYS_S = (0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.13, 0.16, 0.2, 0.25, 0.3, 0.4, 0.5)
 # velocity-squared friction: the output's deflection at its 95th-percentile speed, as a share of its range
 FRICTION_DEFLECTIONS = (0.0025, 0.005, 0.01, 0.02, 0.04, 0.08, 0.16)
@@ -50,6 +52,7 @@ class Context:
     x: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     lag_s: float = 0.0  # the actuator lag of the baseline
     output_rate: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    joint_delay: bool = False  # screen a dead time jointly with the shorter actuator lags
 
     @property
     def rows(self) -> NDArray[np.float32]:
@@ -135,24 +138,39 @@ def creep(ctx: Context) -> FittedModel:
 
 
 def transport_delay(ctx: Context) -> FittedModel | None:
-    """A dead time before the hysteresis, the dynamics refitted with it."""
+    """A dead time before the hysteresis, the dynamics refitted with it.
 
-    def delayed_rows(delay_s: float) -> NDArray[np.float32]:
+    The baseline's actuator lag was chosen without a dead time, and a lag absorbs much of one
+    (a 0.25 s lag for a 0.2 s dead time); so with ``ctx.joint_delay`` the dead time is screened
+    jointly with the shorter actuator lags too (coarse grid: :data:`JOINT_DELAYS_S`)."""
+
+    def delayed_rows(delay_s: float, lag_s: float) -> NDArray[np.float32]:
         steps = max(1, int(round(delay_s / ctx.dt)))
-        return np.concatenate([np.repeat(ctx.rows[:1], steps, axis=0), ctx.rows[:-steps]])
+        rows = ctx.lag_rows[lag_s]
+        return np.concatenate([np.repeat(rows[:1], steps, axis=0), rows[:-steps]])
 
     longest = 0.1 * ctx.y.size * ctx.dt  # a shift of at most a tenth of the record
     # a shift of one or two samples is within what the model's own resolution (Everett grid,
     # rate smoothing) produces on a plant without any delay; evidence starts at 3 samples
-    delays = [d for d in DELAYS_S if MIN_DELAY_SAMPLES * ctx.dt <= d <= longest]
-    if not delays:
+    usable = [d for d in DELAYS_S if MIN_DELAY_SAMPLES * ctx.dt <= d <= longest]
+    if not usable:
         return None
-    return _best_of(
-        ctx,
-        "dead_time_s",
-        delays,
-        lambda d, it: fit_hammerstein("transport_delay", delayed_rows(d), ctx.y, ctx.train, ctx.dt, it)[0],
-    )
+    pairs = [(d, ctx.lag_s) for d in usable]
+    if ctx.joint_delay:
+        shorter = [lag for lag in ctx.lag_rows if lag < ctx.lag_s]
+        pairs += [(d, lag) for lag in shorter for d in JOINT_DELAYS_S if d in usable]
+    best, best_error = pairs[0], np.inf
+    for delay_s, lag_s in pairs:
+        model, _ = fit_hammerstein(
+            "transport_delay", delayed_rows(delay_s, lag_s), ctx.y, ctx.train, ctx.dt, SCREEN_ITERATIONS
+        )
+        error = rmse(model.prediction[ctx.train], ctx.y[ctx.train])
+        if np.isfinite(error) and error < best_error:
+            best, best_error = (delay_s, lag_s), error
+    model, _ = fit_hammerstein("transport_delay", delayed_rows(*best), ctx.y, ctx.train, ctx.dt, FULL_ITERATIONS)
+    model.extra["dead_time_s"] = float(best[0])
+    model.extra["actuator_lag_with_dead_time_s"] = float(best[1])
+    return model
 
 
 def _four_terms(ctx: Context, name: str, v: NDArray[np.float64], label: str) -> FittedModel:

@@ -15,9 +15,14 @@ rows. A candidate passes when
 * an observed cause (load, temperature) also beats ``slow_drift``, the same flexibility in time
   alone, fold by fold by the same threshold: a slowly wandering column soaks up any drift.
 
-Among the candidates that pass the highest mean gain wins. The constants were calibrated on the
-effect-free records of the tuning plants (tests/plants, ``bench/diagnose_scorecard.py --set
-tuning``); the false-alarm rate they give on records never tuned on is in the README.
+Among the candidates that pass the highest mean gain wins. :func:`with_signatures` then applies
+the two-stage rule: a residual signature (:mod:`host.diagnose.signatures`) at p <=
+:data:`SIGNATURE_ALPHA` nominates its cause and the held-out folds confirm it (:func:`unconfirmed`),
+and a held-out verdict whose own signature the record shows at p > :data:`VETO_P` is withdrawn.
+
+The constants were calibrated on the effect-free records of the tuning plants (tests/plants,
+``bench/diagnose_scorecard.py --set tuning``); the false-alarm rate they give on records never
+tuned on is in the README.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from host.diagnose.candidates import CAUSES, OBSERVED_CAUSES
+from host.diagnose.signatures import Signature
 
 GAIN_FLOOR = 0.03
 T_CRIT = 1.5
@@ -171,3 +177,68 @@ def choose(scores: dict[str, CandidateScore], noise: float) -> Verdict:
     why = reasons[best] or "it does not pass"
     reason = f"no extension improves held-out error convincingly: the best ({best}) does not count because {why}"
     return Verdict("none", reason, "no candidate passed", confidence, passing)
+
+
+# two-stage rule: a signature at this level nominates its cause (its false-alarm rate is the
+# surrogate p-value's); the held-out gain must then confirm it
+SIGNATURE_ALPHA = 0.01
+# a verdict of the held-out gain alone is withdrawn when its own signature, where the record can
+# show one, is this far from significant: the gain then came from a term that fits structural error
+VETO_P = 0.2
+
+
+def unconfirmed(s: CandidateScore, noise: float) -> str | None:
+    """None when the held-out folds confirm a nominated cause: the fit held, the mean gain is at
+    least :data:`GAIN_FLOOR`, it helps on at least half of the folds and beats the noise floor."""
+    if not s.available:
+        return "its column is missing or constant"
+    if s.failed:
+        return f"its fit blew up on {s.failed_folds} folds"
+    if s.mean < GAIN_FLOOR:
+        return f"its mean held-out gain {s.mean:+.1%} is below {GAIN_FLOOR:.0%} (fold gains {_folds(s.gains)})"
+    if sum(g > 0 for g in s.gains) < len(s.gains) / 2:
+        return f"it helps on fewer than half of the folds ({_folds(s.gains)})"
+    if float(np.mean(s.reductions)) < NOISE_SHARE * noise:
+        return f"it lowers the RMSE by less than {NOISE_SHARE:g} x the noise floor ({noise:.3g})"
+    return None
+
+
+def with_signatures(
+    verdict: Verdict, scores: dict[str, CandidateScore], signatures: dict[str, Signature], noise: float
+) -> Verdict:
+    """The two-stage rule over the held-out verdict: signatures nominate, held-out gains confirm,
+    and a held-out verdict its own signature contradicts is withdrawn."""
+    nominated = {c: g for c, g in signatures.items() if g.p_value <= SIGNATURE_ALPHA and c in scores}
+    confirmed = [c for c in nominated if unconfirmed(scores[c], noise) is None]
+    confidence = dict(verdict.confidence)
+    confidence["signature_p"] = {c: g.p_value for c, g in signatures.items()}
+    if confirmed:
+        best = max(confirmed, key=lambda c: scores[c].mean)
+        s, sig = scores[best], signatures[best]
+        reason = (
+            f"{best}: its signature is significant ({sig.detail}) and the held-out gain confirms it "
+            f"({s.mean:+.1%}; fold gains {_folds(s.gains)})"
+        )
+        if verdict.cause not in ("none", best):
+            reason += f"; the held-out gain alone ranked {verdict.cause} first"
+        decided_by = f"signature (p = {sig.p_value:.2g}, <= {SIGNATURE_ALPHA:g}), confirmed by held-out gain"
+        confidence["over_threshold"] = float(s.mean - GAIN_FLOOR)
+        return Verdict(best, reason, decided_by, confidence, verdict.passing)
+    cause = verdict.cause
+    if cause in signatures and signatures[cause].p_value > VETO_P:
+        sig = signatures[cause]
+        reason = (
+            f"no cause is named: the held-out gain favours {cause} ({scores[cause].mean:+.1%}) but its own "
+            f"signature does not show it ({sig.detail}); a flexible term then fits the model's structural error"
+        )
+        unconfirmed_nominees = {c: unconfirmed(scores[c], noise) for c in nominated}
+        if unconfirmed_nominees:
+            reason += "; nominated by a signature but not confirmed: " + "; ".join(
+                f"{c} ({why})" for c, why in unconfirmed_nominees.items()
+            )
+        return Verdict("none", reason, f"signature veto (p = {sig.p_value:.2g} > {VETO_P:g})", confidence, [])
+    reason = verdict.reason
+    for c in nominated:
+        why = unconfirmed(scores[c], noise)
+        reason += f"; {c} was nominated by its signature (p = {nominated[c].p_value:.2g}) but {why}"
+    return Verdict(cause, reason, verdict.decided_by, confidence, verdict.passing)

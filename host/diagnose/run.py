@@ -7,7 +7,9 @@
 2. Each extension adds one physical term (:mod:`host.diagnose.candidates`); its score per fold
    is the relative reduction of held-out RMSE against the baseline.
 3. :func:`host.diagnose.decide.choose` names the cause with calibrated evidence, or ``none``
-   with the reason.
+   with the reason; :func:`host.diagnose.decide.with_signatures` then applies the two-stage rule:
+   a residual signature (:mod:`host.diagnose.signatures`, surrogate-calibrated) nominates a cause
+   that the held-out gain confirms, and withdraws a held-out verdict its own signature contradicts.
 
 Records longer than :data:`MAX_WORK_SAMPLES` are decimated (block means, an anti-alias filter)
 with a warning; BLAS threads are sized to the problem (small least-squares problems run fastest
@@ -27,11 +29,12 @@ from threadpoolctl import threadpool_limits
 from edge.errors import DataError
 from host.data import Measurement
 from host.diagnose.candidates import CAUSES, Context, extension
-from host.diagnose.decide import CandidateScore, choose
+from host.diagnose.decide import CandidateScore, choose, with_signatures
 from host.diagnose.evidence import baseline_evidence
 from host.diagnose.features import branch_offset, first_order, preisach_rows, smoothed_rate
 from host.diagnose.folds import BLOCKS_PER_FOLD, MIN_BLOCK_SAMPLES, check_folds, holdout_masks, in_range, noise_floor
 from host.diagnose.hammerstein import FittedModel, fit_hammerstein, rmse
+from host.diagnose.signatures import signatures
 from host.identify.common import memory_start
 
 __all__ = ["CAUSES", "Diagnosis", "diagnose", "prepare"]
@@ -46,6 +49,11 @@ MIN_SAMPLES = 400
 PREISACH_LEVELS = 16
 MAX_WORK_SAMPLES = 30_000
 BASELINE_OUTLIER = 2.5
+# the dead-time signature at or below this p asks for a dead time screened jointly with the
+# shorter actuator lags (the baseline's lag may have absorbed it); cheaper than always doing so
+JOINT_DELAY_P = 0.2
+# a hold's first second(s) are the baseline's own settling, not drift
+SETTLE_S = 1.0
 LARGE_PROBLEM_CELLS = 20_000_000  # rows x Everett cells above which a second BLAS thread pays
 
 
@@ -86,6 +94,7 @@ class Diagnosis:
             "gain": self.gain,
             "holdout": self.holdout,
             "extended_model": self.extended_model,
+            "signatures": self.evidence.get("signatures", {}),
             "notes": self.notes,
         }
 
@@ -202,6 +211,22 @@ def _diagnose(
     scored_rows = 0
     with _progress(1 + folds * (1 + len(CAUSES)), progress) as bar:
         ctx.lag_s = choose_actuator_lag(ctx)
+        ctx.train = np.ones(n, dtype=bool)
+        baseline_full = fit_baseline(ctx)
+        found = signatures(
+            ctx.y - baseline_full.prediction,
+            ctx.y,
+            baseline_full.prediction,
+            ctx.u,
+            ctx.t,
+            ctx.x,
+            ctx.branch,
+            ctx.extras,
+            ctx.dt,
+            settle_s=SETTLE_S + 5.0 * ctx.lag_s,
+        )
+        delay_signature = found.get("transport_delay")
+        ctx.joint_delay = delay_signature is not None and delay_signature.p_value <= JOINT_DELAY_P
         bar.update()
         for held in masks:
             ctx.train = ~held
@@ -247,13 +272,14 @@ def _diagnose(
             f"{skipped} of {folds} folds had fewer than {MIN_BLOCK_SAMPLES} in-range held-out rows and were not scored"
         )
     noise = noise_floor(ctx.y)
-    verdict = choose(scores, noise)
-    cause = verdict.cause
     ctx.train = np.ones(n, dtype=bool)
-    baseline_full = fit_baseline(ctx)
+    baseline_full = fit_baseline(ctx)  # again: the folds left ctx.x at their own fits
+    verdict = with_signatures(choose(scores, noise), scores, found, noise)
+    cause = verdict.cause
     extended_full = extension(ctx, cause) if cause != "none" else None
     evidence = baseline_evidence(baseline_full.prediction - ctx.y, ctx.u, ctx.rate, ctx.extras, ctx.dt)
     evidence["noise_floor"] = noise
+    evidence["signatures"] = {c: g.as_json() for c, g in found.items()}
     reason = verdict.reason
     if cause == "none":
         whiteness = evidence["whiteness"]

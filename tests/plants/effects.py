@@ -94,7 +94,7 @@ def apply(
     rng: np.random.Generator,
 ) -> tuple[Array, dict[str, Array], dict[str, object]]:
     """Run ``core`` with ``effect`` in ``form``: returns ``y`` (noiseless), the extra columns, the truth."""
-    t = np.arange(u.size) * dt_s
+    t = np.arange(u.size, dtype=np.float64) * dt_s
     load = load_steps(t, rng)
     temperature = warming(t, rng) if effect == "temperature_drift" else random_walk_room(t, rng)
     width = np.ones_like(u)

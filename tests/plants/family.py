@@ -85,4 +85,4 @@ def measurement(case: Case) -> tuple[Measurement, dict[str, object]]:
         "load": np.round(extras["load"] + rng.normal(0, 0.01, y.size), 3),
         "temperature": np.round(extras["temperature"] + rng.normal(0, 0.05, y.size), 2),
     }
-    return Measurement(np.arange(u.size) * dt, u, y, extras, source=case.name), truth
+    return Measurement(np.arange(u.size, dtype=np.float64) * dt, u, y, extras, source=case.name), truth

@@ -16,7 +16,7 @@ Protocol = Callable[[float, float, float, np.random.Generator], NDArray[np.float
 
 
 def _t(duration_s: float, dt_s: float) -> NDArray[np.float64]:
-    return np.arange(int(round(duration_s / dt_s))) * dt_s
+    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
 
 
 def multisine(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> NDArray[np.float64]:
