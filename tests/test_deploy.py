@@ -228,3 +228,18 @@ def test_a_local_verify_failure_does_not_claim_the_targets_state(tmp_path, signe
     status, _, err = cli(capsys, "deploy", bundle(tmp_path / "a"), tmp_path / "rig", "--trusted", public)
     assert status == 2 and "step 'local verify'" in err
     assert "current is" not in err and "not contacted" in err
+
+
+def test_rollback_also_requires_the_targets_keys(tmp_path, signed, capsys):
+    import shutil
+
+    _, public = signed
+    target = tmp_path / "rig"
+    assert cli(capsys, "deploy", bundle(tmp_path / "a", 1), target)[0] == 0  # unsigned, before any keys
+    assert cli(capsys, "deploy", bundle(tmp_path / "b", 2), target)[0] == 0
+    running = current(target)
+    (target / "trusted_keys").mkdir()
+    shutil.copyfile(public, target / "trusted_keys" / "pmactl.pub")
+    status, _, err = cli(capsys, "rollback", target)
+    assert status == 2 and "step 'health'" in err and "unsigned" in err
+    assert current(target) == running
