@@ -17,19 +17,25 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 from edge.errors import BundleError
-from edge.runtime.bundle import CURRENT, MANIFEST, RELEASES, SIGNATURE
+from edge.runtime.bundle import CURRENT, FORMAT, MANIFEST, RELEASES, SIGNATURE
 
 PREVIOUS = "previous"
 STAGING_PREFIX = ".staging-"
 INCOMING_PREFIX = ".incoming-"
 STALE_SECONDS = 3600.0  # a staging directory older than this is a crashed write, safe to remove
 DEFAULT_KEEP = 5
+TRUSTED_KEYS = "trusted_keys"  # the target's own trusted pmactl.pub files (see host.deploy.agent)
+LOCK = ".pmactl-deploy.lock"
+RELEASE_ID = re.compile(r"[0-9a-f]{16}")
+# what pmactl itself puts next to releases/ (temporary links are ".current.<pid>.<ns>")
+OWN_ENTRIES = (RELEASES, CURRENT, PREVIOUS, TRUSTED_KEYS, LOCK)
 
 
 def fsync_path(path: Path) -> None:
@@ -49,9 +55,71 @@ def fsync_tree(directory: Path) -> None:
     fsync_path(directory)
 
 
+def is_release_id(name: str) -> bool:
+    """True for a release directory name: 16 lowercase hex digits."""
+    return RELEASE_ID.fullmatch(name) is not None
+
+
+def is_release(entry: Path) -> bool:
+    """True when ``entry`` is a pmactl release: a release-id name and a manifest with our format."""
+    if not is_release_id(entry.name) or entry.is_symlink() or not entry.is_dir():
+        return False
+    try:
+        manifest = json.loads((entry / MANIFEST).read_text())
+    except (OSError, ValueError):
+        return False
+    return isinstance(manifest, dict) and manifest.get("format") == FORMAT
+
+
+def _is_own_link(directory: Path, name: str) -> bool:
+    """True when ``directory/name`` is a symlink of the form ``releases/<id>``."""
+    try:
+        target = os.readlink(directory / name)
+    except OSError:
+        return False
+    parts = Path(target).parts
+    return len(parts) == 2 and parts[0] == RELEASES and is_release_id(parts[1])
+
+
+def foreign_entries(directory: Path) -> list[str]:
+    """Names in ``directory`` (and in its ``releases/``) that pmactl did not write, sorted."""
+    foreign = []
+    for entry in directory.iterdir():
+        own_temp = entry.name.startswith((f".{CURRENT}.", f".{PREVIOUS}.")) and entry.is_symlink()
+        if entry.name not in OWN_ENTRIES and not own_temp:
+            foreign.append(entry.name)
+    for name in (CURRENT, PREVIOUS):
+        if ((directory / name).exists() or (directory / name).is_symlink()) and not _is_own_link(directory, name):
+            foreign.append(name)
+    releases = directory / RELEASES
+    if releases.is_symlink() or (releases.exists() and not releases.is_dir()):
+        foreign.append(RELEASES)
+    elif releases.is_dir():
+        for entry in releases.iterdir():
+            ours = entry.name.startswith((STAGING_PREFIX, INCOMING_PREFIX)) or is_release(entry)
+            if not ours:
+                foreign.append(f"{RELEASES}/{entry.name}")
+    return sorted(foreign)
+
+
 def is_store(directory: Path) -> bool:
-    """True when ``directory`` has the releases/current layout."""
-    return (directory / RELEASES).is_dir() and not (directory / RELEASES).is_symlink()
+    """True when ``directory`` is a pmactl bundle store: ``current`` is a symlink into its real
+    ``releases/``, or ``releases/`` is there and nothing in the directory is foreign (a first
+    write that has not flipped yet). A user's folder that merely has a ``releases/`` is not one."""
+    releases = directory / RELEASES
+    if not releases.is_dir() or releases.is_symlink():
+        return False
+    return _is_own_link(directory, CURRENT) or not foreign_entries(directory)
+
+
+def may_hold_store(directory: Path) -> bool:
+    """True when a store may be made or updated at ``directory``: absent, a store, or holding
+    nothing foreign (empty, or only ``trusted_keys/`` put there before the first deploy)."""
+    if not directory.exists() and not directory.is_symlink():
+        return True
+    if not directory.is_dir():
+        return False
+    return is_store(directory) or not foreign_entries(directory)
 
 
 def link_target(directory: Path, name: str) -> str | None:
@@ -104,7 +172,16 @@ def publish(directory: Path, staging: Path, release_id: str) -> Path:
     return final
 
 
+def _refuse_foreign_link(directory: Path, name: str) -> None:
+    path = directory / name
+    if (path.exists() or path.is_symlink()) and not path.is_symlink():
+        raise BundleError(
+            f"{path}: is not a pmactl link (a file or directory is there); move it away and retry (nothing changed)"
+        )
+
+
 def _replace_link(directory: Path, name: str, release_id: str) -> None:
+    _refuse_foreign_link(directory, name)
     temporary = directory / f".{name}.{os.getpid()}.{time.monotonic_ns()}"
     os.symlink(f"{RELEASES}/{release_id}", temporary)
     os.replace(temporary, directory / name)
@@ -114,6 +191,8 @@ def flip(directory: Path, release_id: str) -> str | None:
     """Make ``release_id`` current; ``previous`` gets the old current. Returns the old current."""
     if not (directory / RELEASES / release_id / MANIFEST).is_file():
         raise BundleError(f"{directory}: release {release_id} is not complete; nothing was changed")
+    _refuse_foreign_link(directory, CURRENT)
+    _refuse_foreign_link(directory, PREVIOUS)
     old = link_target(directory, CURRENT)
     if old is not None and old != release_id:
         _replace_link(directory, PREVIOUS, old)
@@ -126,6 +205,7 @@ def restore(directory: Path, current: str | None, previous: str | None) -> None:
     """Put ``current`` and ``previous`` back as they were (after a failed post-flip check)."""
     for name, release_id in ((CURRENT, current), (PREVIOUS, previous)):
         if release_id is None:
+            _refuse_foreign_link(directory, name)
             (directory / name).unlink(missing_ok=True)
         else:
             _replace_link(directory, name, release_id)
@@ -155,7 +235,7 @@ def list_releases(directory: Path) -> list[Release]:
     current, previous = link_target(directory, CURRENT), link_target(directory, PREVIOUS)
     found = []
     for entry in releases.iterdir():
-        if entry.name.startswith(".") or not (entry / MANIFEST).is_file():
+        if not is_release(entry):  # only pmactl's own releases are listed (and so ever pruned)
             continue
         try:
             manifest = json.loads((entry / MANIFEST).read_text())

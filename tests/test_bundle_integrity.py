@@ -237,3 +237,53 @@ def test_a_bundle_in_the_previous_flat_layout_still_loads(tmp_path):
     assert load_bundle(flat).path == flat
     with pytest.raises(BundleError, match="older single-directory layout"):
         save(flat)  # never rewritten in place: nothing of it is moved
+
+
+# -- a folder that merely has a releases/ is not a store (review finding: data loss) --------
+
+
+def test_a_user_folder_with_releases_is_refused_and_nothing_of_it_is_deleted(tmp_path):
+    folder = tmp_path / "proj2"
+    old = folder / "releases" / "old"
+    old.mkdir(parents=True)
+    (old / "manifest.json").write_text('{"title": "my thesis"}')
+    (old / "thesis.tex").write_text("\\documentclass{article}")
+    model, inverse = models()
+    for _ in range(6):
+        with pytest.raises(BundleError, match="not a pmactl bundle"):
+            write_bundle(folder, model, inverse, units=("bar", "mm"))
+    assert (old / "thesis.tex").read_text() == "\\documentclass{article}"
+    assert sorted(p.name for p in folder.rglob("*")) == ["manifest.json", "old", "releases", "thesis.tex"]
+
+
+def test_prune_keeps_entries_in_a_store_that_are_not_pmactl_releases(tmp_path):
+    model, inverse = models()
+    write_bundle(tmp_path / "b", model, inverse, units=("bar", "mm"))
+    foreign = {
+        "notes": {"format": "pmactl-bundle", "created_utc": "2000-01-01"},  # not a release id
+        "0123456789abcdef": {"format": "someone-else", "created_utc": "2000-01-01"},  # not our format
+    }
+    for name, manifest in foreign.items():
+        (tmp_path / "b" / "releases" / name).mkdir()
+        (tmp_path / "b" / "releases" / name / "manifest.json").write_text(json.dumps(manifest))
+    for seed in range(2, 9):
+        write_bundle(tmp_path / "b", *models(seed), units=("bar", "mm"))
+    names = {p.name for p in (tmp_path / "b" / "releases").iterdir()}
+    assert set(foreign) <= names and len(names - set(foreign)) == 5
+
+
+def test_a_regular_file_named_current_is_never_replaced(tmp_path):
+    folder = tmp_path / "proj"
+    (folder / "releases").mkdir(parents=True)
+    (folder / "current").write_text("my current notes")
+    with pytest.raises(BundleError):
+        write_bundle(folder, *models(), units=("bar", "mm"))
+    assert not (folder / "current").is_symlink() and (folder / "current").read_text() == "my current notes"
+
+
+def test_a_regular_file_named_previous_in_a_store_is_never_replaced(tmp_path):
+    write_bundle(tmp_path / "b", *models(1), units=("bar", "mm"))
+    (tmp_path / "b" / "previous").write_text("mine")
+    with pytest.raises(BundleError, match="previous: is not a pmactl link"):
+        write_bundle(tmp_path / "b", *models(2), units=("bar", "mm"))
+    assert (tmp_path / "b" / "previous").read_text() == "mine"

@@ -158,3 +158,88 @@ def test_the_target_agent_needs_only_the_edge_extra(tmp_path):
         shutil.copyfile(path, staging / path.name)
     installed = agent("install", "--root", target, "--staging", staging, "--id", source.name)
     assert installed["ok"] and installed["current"] == source.name
+
+
+# -- review findings: foreign targets, the staging path, the target's own keys, messages ------
+
+
+@pytest.mark.parametrize("foreign", ["notes.txt", "releases/old/thesis.tex"])
+def test_a_foreign_target_folder_is_refused_in_one_line(tmp_path, capsys, foreign):
+    target = tmp_path / "rig"
+    (target / foreign).parent.mkdir(parents=True, exist_ok=True)
+    (target / foreign).write_text("mine")
+    before = sorted(p.relative_to(target) for p in target.rglob("*"))
+    status, _, err = cli(capsys, "deploy", bundle(tmp_path / "a"), target)
+    assert status == 2 and "step 'prepare'" in err and "not a pmactl deploy target" in err
+    assert err.count("\n") == 1 and sorted(p.relative_to(target) for p in target.rglob("*")) == before
+
+
+def test_install_refuses_a_staging_path_outside_the_targets_releases(tmp_path, capsys):
+    from host.deploy import agent
+
+    target = tmp_path / "rig"
+    assert cli(capsys, "deploy", bundle(tmp_path / "a"), target)[0] == 0
+    victim = tmp_path / "thesis"
+    victim.mkdir()
+    (victim / "chapter1.tex").write_text("mine")
+    status = agent.main(["install", "--root", str(target), "--staging", str(victim), "--id", "0" * 16])
+    answer = json.loads(capsys.readouterr().out)
+    assert status == 1 and "not an incoming upload" in answer["error"]
+    assert (victim / "chapter1.tex").read_text() == "mine"
+
+
+def test_the_first_deploy_with_trusted_pins_the_key_and_unsigned_ones_are_refused_after(tmp_path, signed, capsys):
+    private, public = signed
+    target = tmp_path / "rig"
+    status, out, _ = cli(capsys, "deploy", bundle(tmp_path / "a", 1, private), target, "--trusted", public)
+    assert status == 0 and "now trusts only key" in out
+    assert [p.suffix for p in (target / "trusted_keys").iterdir()] == [".pub"]
+    running = current(target)
+    status, _, err = cli(capsys, "deploy", bundle(tmp_path / "b", 2), target)  # unsigned, no --trusted
+    assert status == 2 and "step 'verify'" in err and "unsigned" in err and "trusted_keys" in err
+    assert current(target) == running
+
+
+def test_a_later_deploy_cannot_swap_the_targets_keys(tmp_path, signed, capsys):
+    private, public = signed
+    other_private, other_public = keys(tmp_path / "other")
+    target = tmp_path / "rig"
+    assert cli(capsys, "deploy", bundle(tmp_path / "a", 1, private), target, "--trusted", public)[0] == 0
+    pinned = sorted(p.read_bytes() for p in (target / "trusted_keys").iterdir())
+    status, _, err = cli(capsys, "deploy", bundle(tmp_path / "b", 2, other_private), target, "--trusted", other_public)
+    assert status == 2 and "step 'verify'" in err and "not trusted" in err
+    assert sorted(p.read_bytes() for p in (target / "trusted_keys").iterdir()) == pinned
+
+
+def test_keys_placed_on_the_target_by_hand_are_required(tmp_path, signed, capsys):
+    import shutil
+
+    _, public = signed
+    target = tmp_path / "rig"
+    (target / "trusted_keys").mkdir(parents=True)
+    shutil.copyfile(public, target / "trusted_keys" / "pmactl.pub")  # the documented one-time step
+    status, _, err = cli(capsys, "deploy", bundle(tmp_path / "a"), target)
+    assert status == 2 and "step 'verify'" in err and "unsigned" in err
+    assert current(target) is None
+
+
+def test_a_local_verify_failure_does_not_claim_the_targets_state(tmp_path, signed, capsys):
+    _, public = signed
+    status, _, err = cli(capsys, "deploy", bundle(tmp_path / "a"), tmp_path / "rig", "--trusted", public)
+    assert status == 2 and "step 'local verify'" in err
+    assert "current is" not in err and "not contacted" in err
+
+
+def test_rollback_also_requires_the_targets_keys(tmp_path, signed, capsys):
+    import shutil
+
+    _, public = signed
+    target = tmp_path / "rig"
+    assert cli(capsys, "deploy", bundle(tmp_path / "a", 1), target)[0] == 0  # unsigned, before any keys
+    assert cli(capsys, "deploy", bundle(tmp_path / "b", 2), target)[0] == 0
+    running = current(target)
+    (target / "trusted_keys").mkdir()
+    shutil.copyfile(public, target / "trusted_keys" / "pmactl.pub")
+    status, _, err = cli(capsys, "rollback", target)
+    assert status == 2 and "step 'health'" in err and "unsigned" in err
+    assert current(target) == running

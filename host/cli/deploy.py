@@ -67,9 +67,9 @@ def _report(outcome, as_json: bool, verb: str) -> int:  # noqa: ANN001 - host.de
             print(f"  {mark} {step['step']:<17} {seconds}")
     if not outcome.ok:
         rolled = "; rolled back to the release that ran before" if outcome.rolled_back else ""
+        state = f"; current is {outcome.current or 'none'}" if outcome.reached else "; the target was not contacted"
         raise DeployError(
-            f"{verb} to {outcome.target} failed at step '{outcome.failed_step}': {outcome.error}{rolled}; "
-            f"current is {outcome.current or 'none'}"
+            f"{verb} to {outcome.target} failed at step '{outcome.failed_step}': {outcome.error}{rolled}{state}"
         )
     return 0
 
@@ -97,6 +97,11 @@ def run_deploy(args: argparse.Namespace) -> int:
             f"deployed release {outcome.release} to {outcome.target} in {outcome.seconds:.2f} s "
             f"({outcome.bytes_sent} bytes); current {outcome.current}, previous {outcome.previous or 'none'}"
         )
+        if outcome.pinned_keys:
+            print(
+                f"the target now trusts only key(s) {', '.join(outcome.pinned_keys)} "
+                f"(written to its trusted_keys/; later deploys must be signed by one of them)"
+            )
     return 0
 
 

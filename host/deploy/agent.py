@@ -11,6 +11,12 @@ Runs on the rig with the ``edge`` extra only and prints one JSON object on stdou
 * ``rollback``: check ``previous`` and flip back to it.
 * ``releases``: list the releases. ``abort``: remove an incoming upload.
 
+Trusted keys: the target keeps its own, ``DIR/trusted_keys/*.pub`` (``pmactl.pub`` files). When
+any are there, install and rollback require a signature by one of them, whatever keys the
+deployer passes. When none are there, the deployer's ``--trusted-key`` values are used, and a
+successful install with them writes them there (trust on first deploy); a later deploy never
+changes that directory: only someone with a shell on the rig does.
+
 Install and rollback hold an exclusive lock on ``DIR/.pmactl-deploy.lock``, so two deploys to
 one rig cannot interleave their flips.
 """
@@ -31,12 +37,12 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
-from edge.errors import PmactlError
-from edge.runtime.bundle import CURRENT, MANIFEST, RELEASES, key_id
+from edge.errors import BundleError, PmactlError
+from edge.runtime.bundle import CURRENT, MANIFEST, RELEASES, key_id, read_public_key
 from host.deploy.health import DEFAULT_TICK_LIMIT_US, health_check, verify_release
 from models_export import store
 
-LOCK = ".pmactl-deploy.lock"
+LOCK = store.LOCK
 INCOMING_STALE_S = 600.0  # an upload untouched this long was abandoned (its connection died)
 POST_FLIP_TIMEOUT_S = 120.0
 
@@ -80,7 +86,22 @@ def _state(root: Path) -> dict[str, str | None]:
     return {"current": store.link_target(root, CURRENT), "previous": store.link_target(root, store.PREVIOUS)}
 
 
+def _refuse_foreign_target(root: Path) -> None:
+    if store.may_hold_store(root):
+        return
+    if not root.is_dir():
+        raise StepFailed("prepare", f"{root}: exists and is not a directory; deploy to a new or empty directory")
+    foreign = store.foreign_entries(root) or sorted(p.name for p in root.iterdir())
+    shown = ", ".join(foreign[:3]) + (", ..." if len(foreign) > 3 else "")
+    raise StepFailed(
+        "prepare",
+        f"{root}: is a directory that is not a pmactl deploy target (it holds {shown}); "
+        "deploy to a new or empty directory (nothing changed)",
+    )
+
+
 def prepare(root: Path) -> dict[str, object]:
+    _refuse_foreign_target(root)
     (root / RELEASES).mkdir(parents=True, exist_ok=True)
     removed = store.remove_stale_staging(root, INCOMING_STALE_S)
     staging = store.new_staging(root, store.INCOMING_PREFIX)
@@ -88,11 +109,53 @@ def prepare(root: Path) -> dict[str, object]:
     return {"ok": True, "staging": str(staging), "free_bytes": usage.free, "removed_stale": removed, **_state(root)}
 
 
-def _check_upload(staging: Path, release_id: str, trusted: Sequence[tuple[str, bytes]] | None) -> dict[str, object]:
+def target_keys(root: Path) -> list[tuple[str, bytes]]:
+    """The keys the target itself trusts: ``root/trusted_keys/*.pub``, sorted by file name."""
+    folder = root / store.TRUSTED_KEYS
+    if not folder.is_dir():
+        return []
+    return [read_public_key(path) for path in sorted(folder.glob("*.pub"))]
+
+
+def _effective_trust(
+    root: Path, given: Sequence[tuple[str, bytes]] | None
+) -> tuple[Sequence[tuple[str, bytes]] | None, bool]:
+    """``(keys to verify with, True when they are the target's own)``."""
+    own = target_keys(root)
+    return (own, True) if own else (given, False)
+
+
+def pin_keys(root: Path, keys: Sequence[tuple[str, bytes]]) -> list[str]:
+    """Write ``keys`` as ``root/trusted_keys/<key id>.pub`` (PEM), each atomically; returns the ids."""
+    from cryptography.hazmat.primitives import serialization
+    from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PublicKey
+
+    folder = root / store.TRUSTED_KEYS
+    folder.mkdir(mode=0o755, exist_ok=True)
+    for kid, raw in keys:
+        pem = Ed25519PublicKey.from_public_bytes(raw).public_bytes(
+            serialization.Encoding.PEM, serialization.PublicFormat.SubjectPublicKeyInfo
+        )
+        temporary = folder / f".{kid}.pub.tmp"
+        temporary.write_bytes(pem)
+        store.fsync_path(temporary)
+        temporary.rename(folder / f"{kid}.pub")
+    store.fsync_path(folder)
+    return [kid for kid, _ in keys]
+
+
+def _check_upload(
+    staging: Path, release_id: str, trusted: Sequence[tuple[str, bytes]] | None, own: bool, root: Path
+) -> dict[str, object]:
     actual = hashlib.sha256((staging / MANIFEST).read_bytes()).hexdigest()[:16]
     if actual != release_id:
         raise StepFailed("verify", f"manifest arrived as release {actual}, not {release_id}: corrupted in transit")
-    _, report = verify_release(staging, trusted)
+    try:
+        _, report = verify_release(staging, trusted)
+    except BundleError as exc:
+        if own:
+            raise BundleError(f"{exc} (this target trusts only {root / store.TRUSTED_KEYS}/*.pub)") from exc
+        raise
     return report.as_dict()
 
 
@@ -115,15 +178,25 @@ def install(
     keep: int,
     post_flip: str | None,
 ) -> dict[str, object]:
+    if not _is_incoming(root, staging):
+        return {"ok": False, "failed_step": "install", "error": f"{staging}: not an incoming upload of {root}"}
+    if not store.is_store(root):
+        error = f"{root}: not a pmactl deploy target; run prepare first"
+        return {"ok": False, "failed_step": "install", "error": error}
     steps = Steps()
     before = _state(root)
     result: dict[str, object] = {"ok": False, "release": release_id, "rolled_back": False, "steps": steps.done}
     existed = (root / RELEASES / release_id).exists()
     flipped = False
+    given = trusted
     try:
         with locked(root):
+            try:
+                trusted, own = _effective_trust(root, given)
+            except BundleError as exc:
+                raise StepFailed("verify", str(exc)) from exc
             steps.run("fsync", lambda: store.fsync_tree(staging))
-            steps.run("verify", lambda: _check_upload(staging, release_id, trusted))
+            steps.run("verify", lambda: _check_upload(staging, release_id, trusted, own, root))
             release = steps.run("publish", lambda: str(store.publish(root, staging, release_id)))
             steps.run(
                 "health", lambda: health_check(Path(str(release)), trusted, tick_limit_us=tick_limit_us).as_dict()
@@ -134,6 +207,9 @@ def install(
             steps.run("post-flip", lambda: _post_flip_command(post_flip))
             steps.run("prune", lambda: store.prune(root, keep))
             result["ok"] = True
+            if not own and given:  # trust on first deploy; never changed by a later one
+                result["pinned_keys"] = pin_keys(root, given)
+            result["trusted_keys"] = [kid for kid, _ in trusted or ()]
     except StepFailed as exc:
         result.update(failed_step=exc.step, error=str(exc))
         if flipped:
@@ -154,6 +230,10 @@ def rollback(root: Path, trusted: Sequence[tuple[str, bytes]] | None, tick_limit
     result: dict[str, object] = {"ok": False, "rolled_back": False, "steps": steps.done}
     try:
         with locked(root):
+            try:
+                trusted = _effective_trust(root, trusted)[0]
+            except BundleError as exc:
+                raise StepFailed("rollback", str(exc)) from exc
             if before["previous"] is None:
                 raise StepFailed("rollback", f"{root}: no previous release to roll back to")
             target = root / RELEASES / str(before["previous"])
@@ -170,8 +250,19 @@ def releases(root: Path) -> dict[str, object]:
     return {"ok": True, "releases": [r.as_dict() for r in store.list_releases(root)], **_state(root)}
 
 
+def _is_incoming(root: Path, staging: Path) -> bool:
+    """True when ``staging`` is one of ``prepare``'s upload directories of ``root`` (never
+    anything else: install and abort delete or rename it)."""
+    return (
+        staging.parent == root / RELEASES
+        and staging.name.startswith(store.INCOMING_PREFIX)
+        and staging.is_dir()
+        and not staging.is_symlink()
+    )
+
+
 def abort(root: Path, staging: Path) -> dict[str, object]:
-    if staging.parent != root / RELEASES or not staging.name.startswith(store.INCOMING_PREFIX):
+    if not _is_incoming(root, staging):
         return {"ok": False, "error": f"{staging}: not an incoming upload of {root}"}
     shutil.rmtree(staging, ignore_errors=True)
     return {"ok": True}
@@ -212,14 +303,20 @@ def main(argv: Sequence[str] | None = None) -> int:
             result = prepare(root)
         elif args.command == "install":
             result = install(
-                root, args.staging, args.id, _trusted(args.trusted_key), args.tick_limit_us, args.keep, args.post_flip
+                root,
+                args.staging.expanduser(),
+                args.id,
+                _trusted(args.trusted_key),
+                args.tick_limit_us,
+                args.keep,
+                args.post_flip,
             )
         elif args.command == "rollback":
             result = rollback(root, _trusted(args.trusted_key), args.tick_limit_us)
         elif args.command == "releases":
             result = releases(root)
         else:
-            result = abort(root, args.staging)
+            result = abort(root, args.staging.expanduser())
     except (PmactlError, OSError, StepFailed) as exc:
         result = {"ok": False, "failed_step": getattr(exc, "step", args.command), "error": str(exc)}
     except Exception as exc:  # noqa: BLE001 - the host needs an answer it can show, not a traceback

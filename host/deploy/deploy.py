@@ -43,6 +43,8 @@ class Outcome:
     current: str | None = None
     previous: str | None = None
     rolled_back: bool = False
+    reached: bool = False  # the target was contacted, so ``current`` / ``previous`` are its state
+    pinned_keys: list[str] = field(default_factory=list)
     seconds: float = 0.0
     bytes_sent: int = 0
     steps: list[dict[str, object]] = field(default_factory=list)
@@ -142,6 +144,7 @@ async def _deploy(
     except PmactlError as exc:
         return outcome.fail("connect", str(exc), since)
     outcome.passed("connect", transport.description, since)
+    outcome.reached = True
     async with transport:
         since = time.perf_counter()
         try:
@@ -176,6 +179,7 @@ async def _deploy(
     _state(outcome, installed)
     outcome.ok = bool(installed.get("ok"))
     outcome.rolled_back = bool(installed.get("rolled_back"))
+    outcome.pinned_keys = list(installed.get("pinned_keys", []))  # type: ignore[call-overload]
     if not outcome.ok:
         outcome.failed_step, outcome.error = str(installed.get("failed_step")), str(installed.get("error"))
     return outcome
@@ -192,6 +196,7 @@ async def _simple(target: str, args: Sequence[str], step: str, remote_python: st
         url = parse_target(target)
         outcome.target = str(url)
         async with await open_transport(url, remote_python) as transport:
+            outcome.reached = True
             answer = await _agent(transport, [args[0], "--root", url.path, *args[1:]], step)
     except PmactlError as exc:
         return outcome.fail(step, str(exc))
