@@ -4,8 +4,9 @@ The row is a ``ctypes.Structure`` (stages set fields as attributes, ~50 ns each)
 memory is a numpy structured row (:attr:`FrameLayout.dtype`, :meth:`FrameLayout.as_array`),
 which telemetry copies whole. Fields, in order:
 
-* ``t`` [s], ``lateness_us``, ``reference_mm``, ``u_ff_bar`` / ``u_nn_bar`` / ``u_fb_bar``
-  (feedforward, neural correction, feedback), ``u_bar`` (the valve command, 0 when vented);
+* ``t`` [s], ``lateness_us``, ``reference_mm`` (``reference_deg`` on a joint), ``u_ff_bar`` /
+  ``u_nn_bar`` / ``u_fb_bar`` (feedforward, neural correction, feedback), ``u_bar`` (the valve
+  command, 0 when vented; a joint's second valve is its ``valve_b_bar`` channel field);
 * one field per channel (``contraction_mm``, ``pressure_bar``, ``estop``, ``valve_enable``,
   ``load_N``...), NaN when its device could not be read this tick;
 * ``state`` and ``fault`` codes (:class:`edge.runtime.safety.State` order, ``Fault`` values);
@@ -63,9 +64,9 @@ class FrameLayout:
 
 def frame_layout(rig: RigSpec) -> FrameLayout:
     """The frame of ``rig`` (see the module docstring)."""
-    floats = list(CONTROL_FIELDS)
+    floats = [f"reference_{rig.output_unit}" if name == "reference_mm" else name for name in CONTROL_FIELDS]
     channel_fields = []
-    for always in ("contraction_mm", "pressure_bar", "estop", "valve_enable"):  # the controller's
+    for always in (rig.output_field, "pressure_bar", "estop", "valve_enable"):  # the controller's
         if always not in {c.field for c in rig.channels}:
             floats.append(always)
             channel_fields.append(always)
