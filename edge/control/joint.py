@@ -1,24 +1,29 @@
-"""The antagonistic joint's control law (seed 003), pure: frame in, two valve commands out.
+"""The antagonistic joint's control law (seed 003 Figs 4 and 10), pure: frame in, two valve
+commands out.
 
-Per tick, with the desired angle ``theta_d`` [deg]:
+Seed 003 linearises the joint first and compensates the hysteresis that is left. Per tick,
+with the desired angle ``theta_d`` [deg]:
 
-1. feedforward ``u_ff`` [bar]: the inverse Preisach model of the joint (the bundle's inverse
-   table, fitted on a joint recording ``t,u,y`` with ``u`` the differential command [bar] and
-   ``y`` the angle [deg]: ``pmactl fit --model preisach --preisach-method forc --units bar,deg``);
-2. feedback ``u_fb`` [bar]: PID on the angle error (seed 003 eq 8:
-   ``u(k) = u_IPM(k) + K_P e(k) + K_I sum e + K_D (e(k) - e(k-q))``, here with the derivative on
-   the filtered measurement and anti-windup, :class:`edge.control.pid.PID`);
-3. static inversion of the muscle force law for the two pressures: each muscle's contraction
-   follows from ``theta_d`` (``x_A = x_0 + r theta``, ``x_B = x_0 - r theta``, seed 003 eq 1 for a
-   pulley), its force per bar ``c(x) = pi r_0^2 1e5 [a (1 - k x / L_0)^2 - b]`` [N/bar]
-   (Tondu-Lopez, seed 004 eq 1), and the pressures solve ``p_A c_A + p_B c_B = 2 F_0`` (a common
-   pretension force ``F_0``) and ``p_A - p_B = 2 u`` with ``u = u_ff + u_fb`` (the differential the
-   Preisach map was identified on). At ``theta_d = 0`` this is ``p = p_0 +- u`` with ``p_0`` the
-   pretension pressure;
-4. each pressure limited to the ``[control]`` range and slew rate.
+1. feedforward ``u_ff`` [deg]: the inverse Preisach model of the *statically inverted* joint,
+   i.e. of the map commanded angle -> measured angle (the bundle's inverse table, units
+   ``deg,deg``; identified from first-order descending curves recorded through this same
+   static inversion: ``pmactl hil record --rig joint --joint-command angle --scenario forc``,
+   then ``pmactl fit --model preisach --preisach-method forc --units deg,deg``);
+2. feedback ``u_fb`` [deg]: PID on the angle error (seed 003 eq 8,
+   ``u(k) = u_IPM(k) + K_P e(k) + K_I sum e + K_D (e(k) - e(k-q))``; here the derivative acts
+   on the filtered measurement, with anti-windup, :class:`edge.control.pid.PID`). Without a
+   model ("PID alone") ``u_ff = 0``;
+3. static inversion (seed 003 Fig 4) of the commanded angle ``theta_c = u_ff + u_fb``: each
+   muscle's contraction from the pulley (``x_A = x_0 + r theta_c``, ``x_B = x_0 - r theta_c``),
+   forces ``F_A,B = F_0 +- K theta_c / (2 r)`` (a common pretension force ``F_0`` plus what holds
+   the return spring ``K``), and each pressure from the Tondu-Lopez force law (seed 004 eq 1)
+   ``p = F / c(x)``, ``c(x) = pi r_0^2 1e5 [a (1 - k x / L_0)^2 - b]`` [N/bar];
+4. the pressures limited to the ``[control]`` slew rate together (the valve that must move
+   further sets the pace, the other moves by the same fraction, so a step does not twist the
+   joint through an unbalanced co-contraction), then each to the pressure range.
 
-Frame fields: ``reference_deg``, ``u_ff_bar``, ``u_fb_bar``, ``u_nn_bar`` (0: no neural
-correction on the joint), ``u_bar`` (valve A) and ``valve_b_bar`` (valve B).
+Frame fields: ``reference_deg``, ``u_ff_deg``, ``u_fb_deg``, ``u_bar`` (valve A) and
+``valve_b_bar`` (valve B).
 """
 
 from __future__ import annotations
@@ -33,6 +38,7 @@ from edge.control.tick import Limits, Readings
 from edge.hysteresis.lut import CompiledModel
 
 DEG = math.pi / 180.0
+COMMAND_LIMIT_DEG = 90.0  # the commanded angle never leaves +-90 deg
 
 
 @dataclass(frozen=True)
@@ -41,7 +47,8 @@ class JointModel:
 
     Muscles: Tondu-Lopez ``F = pi r_0^2 p [a (1 - k eps)^2 - b]`` with ``eps = x / L_0``;
     geometry: a pulley of radius ``pulley_radius_mm``; each muscle is mounted so that it pulls
-    ``pretension_n`` [N] at ``pretension_bar`` [bar] with the joint at 0 deg.
+    ``pretension_n`` [N] at ``pretension_bar`` [bar] with the joint at 0 deg; a return spring of
+    ``return_stiffness_nm_per_rad`` [N m/rad] (0 if the joint has none).
     """
 
     pulley_radius_mm: float = 25.0
@@ -52,6 +59,7 @@ class JointModel:
     tondu_a: float = 16.7
     tondu_b: float = 6.55
     tondu_k: float = 1.5
+    return_stiffness_nm_per_rad: float = 0.0
 
     def newton_per_bar(self, contraction_mm: float) -> float:
         """Force per bar of one muscle at ``contraction_mm`` [N/bar] (negative past its stroke)."""
@@ -76,22 +84,23 @@ class JointModel:
         return 0.5 * (lo + hi)
 
 
-class JointPressures:
-    """Step 3 of the module docstring: the two pressures [bar] from the desired angle [deg] and
-    the differential ``u`` [bar]."""
+class StaticInversion:
+    """Step 3 of the module docstring: the two pressures [bar] that hold ``angle_deg``."""
 
     def __init__(self, model: JointModel) -> None:
         self.model = model
         self.x0_mm = model.mount_contraction_mm()
         self.c_floor = 0.05 * model.newton_per_bar(self.x0_mm)  # a muscle near the end of its stroke
-        self.force_n = model.pretension_n
+        self._torque_to_force = model.return_stiffness_nm_per_rad / (2e-3 * model.pulley_radius_mm)  # N per rad
 
-    def __call__(self, angle_deg: float, u_bar: float) -> tuple[float, float]:
-        arc = self.model.pulley_radius_mm * angle_deg * DEG
-        c_a = max(self.model.newton_per_bar(self.x0_mm + arc), self.c_floor)
-        c_b = max(self.model.newton_per_bar(self.x0_mm - arc), self.c_floor)
-        p_b = 2.0 * (self.force_n - u_bar * c_a) / (c_a + c_b)
-        return p_b + 2.0 * u_bar, p_b
+    def __call__(self, angle_deg: float) -> tuple[float, float]:
+        model = self.model
+        angle = angle_deg * DEG
+        arc_mm = model.pulley_radius_mm * angle
+        c_a = max(model.newton_per_bar(self.x0_mm + arc_mm), self.c_floor)
+        c_b = max(model.newton_per_bar(self.x0_mm - arc_mm), self.c_floor)
+        spring = self._torque_to_force * angle
+        return (model.pretension_n + spring) / c_a, max(model.pretension_n - spring, 0.0) / c_b
 
 
 class JointController:
@@ -99,9 +108,9 @@ class JointController:
 
     Args:
         reference: desired angle [deg] as a function of time [s].
-        gains: PID gains in bar of differential per deg (kp), per deg s (ki), bar s per deg (kd).
+        gains: PID gains in deg of commanded angle per deg of error (kp), per deg s (ki), s (kd).
         model: the joint's statics (:class:`JointModel`).
-        inverse: the inverse Preisach table (angle [deg] -> differential [bar]) or None: PID alone.
+        inverse: the inverse Preisach table (desired -> commanded angle, deg) or None: PID alone.
         limits: each valve's pressure range and slew rate.
     """
 
@@ -116,14 +125,14 @@ class JointController:
         limits: Limits | None = None,
     ) -> None:
         self.reference = reference
-        self.limits = lim = limits or Limits()
+        self.limits = limits or Limits()
         self.inverse = inverse
-        self.pressures = JointPressures(model)
-        half_span = 0.5 * (lim.pressure_max_bar - lim.pressure_min_bar)
-        self.pid = PID(PIDGains(gains.kp, gains.ki, gains.kd, gains.tau_d_s, -half_span, half_span))
+        self.statics = StaticInversion(model)
+        self.pid = PID(PIDGains(gains.kp, gains.ki, gains.kd, gains.tau_d_s, -COMMAND_LIMIT_DEG, COMMAND_LIMIT_DEG))
         self._last_bar = self._last_b_bar = 0.0
+        self._last_diff_bar = 0.0  # (p_A - p_B) / 2 of the latest tick: the supervisor's stuck check
         self.reference_mm_ = math.nan  # the supervisor's name for the latest reference (here deg)
-        self.bias_bar_ = 0.0
+        self.bias_bar_ = 0.0  # the supervisor's name for the feedforward (here deg)
 
     def arm(self, readings: Readings, pressure_bar: float = 0.0) -> None:
         """Bumpless start from the present angle (``readings.contraction_mm`` carries it, deg)."""
@@ -131,25 +140,28 @@ class JointController:
             self.inverse.reset()
         self.pid.reset(readings.contraction_mm, 0.0)
         self._last_bar = self._last_b_bar = pressure_bar
+        self._last_diff_bar = 0.0
 
     def fill_from(self, frame: Any, dt: float, t: float, y: float, p: float) -> float:
         """Fill the command fields of ``frame`` for angle ``y`` [deg]; returns valve A's command."""
         reference = self.reference_mm_ = self.reference(t)
         feedforward = self.bias_bar_ = self.inverse.step(reference) if self.inverse is not None else 0.0
         if not math.isfinite(feedforward):
-            frame.reference_deg, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar = reference, feedforward, 0.0, 0.0
+            frame.reference_deg, frame.u_ff_deg, frame.u_fb_deg = reference, feedforward, 0.0
             frame.u_bar = frame.valve_b_bar = math.nan
             return math.nan
-        total = self.pid.step(reference, y, dt, feedforward)
-        p_a, p_b = self.pressures(reference, total)
+        commanded = self.pid.step(reference, y, dt, feedforward)
+        p_a, p_b = self.statics(commanded)
         lim = self.limits
         step = lim.slew_bar_per_s * dt
-        p_a = min(max(p_a, self._last_bar - step, lim.pressure_min_bar), self._last_bar + step, lim.pressure_max_bar)
-        p_b = min(
-            max(p_b, self._last_b_bar - step, lim.pressure_min_bar), self._last_b_bar + step, lim.pressure_max_bar
-        )
-        self._last_bar, self._last_b_bar = p_a, p_b
-        frame.reference_deg, frame.u_ff_bar, frame.u_nn_bar = reference, feedforward, 0.0
-        frame.u_fb_bar = total - feedforward
+        last_a, last_b = self._last_bar, self._last_b_bar
+        d_a, d_b = p_a - last_a, p_b - last_b
+        largest = max(abs(d_a), abs(d_b))
+        if largest > step:  # both valves move by the same fraction: the pair stays on the static path
+            p_a, p_b = last_a + d_a * step / largest, last_b + d_b * step / largest
+        p_a = min(max(p_a, lim.pressure_min_bar), lim.pressure_max_bar)
+        p_b = min(max(p_b, lim.pressure_min_bar), lim.pressure_max_bar)
+        self._last_bar, self._last_b_bar, self._last_diff_bar = p_a, p_b, 0.5 * (p_a - p_b)
+        frame.reference_deg, frame.u_ff_deg, frame.u_fb_deg = reference, feedforward, commanded - feedforward
         frame.u_bar, frame.valve_b_bar = p_a, p_b
         return p_a

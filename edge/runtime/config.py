@@ -60,12 +60,12 @@ class ControlSection:
 @dataclass(frozen=True)
 class JointSection(JointModel):
     """An antagonistic joint's statics (:class:`edge.control.joint.JointModel`: mm, N, bar,
-    Tondu-Lopez a, b, k) and its angle PID: bar of differential pressure per deg, per deg s,
-    bar s per deg. Used when the rig has an ``angle`` channel."""
+    N m/rad, Tondu-Lopez a, b, k) and its angle PID, whose output is a commanded angle: deg per
+    deg of error (kp), per deg s (ki_per_s), s (kd_s). Used when the rig has an ``angle`` channel."""
 
-    kp_bar_per_deg: float = 0.04
-    ki_bar_per_deg_s: float = 0.4
-    kd_bar_s_per_deg: float = 0.0
+    kp: float = 1.0
+    ki_per_s: float = 10.0
+    kd_s: float = 0.0
     derivative_filter_s: float = 0.005
 
 
@@ -257,11 +257,12 @@ def _check_values(config: RigConfig) -> None:
             f"{safety.pressure_max_bar}; the controller would trip its own overpressure limit"
         )
     joint = config.joint
-    for name in ("kp_bar_per_deg", "ki_bar_per_deg_s", "kd_bar_s_per_deg"):
-        _in_range(src, "joint", name, getattr(joint, name), 0.0, 1e3, "; a negative gain drives the joint away")
+    for name in ("kp", "ki_per_s", "kd_s"):
+        _in_range(src, "joint", name, getattr(joint, name), 0.0, 1e4, "; a negative gain drives the joint away")
     _in_range(src, "joint", "derivative_filter_s", joint.derivative_filter_s, 1e-6, 10.0)
     for name in ("pulley_radius_mm", "pretension_n", "pretension_bar", "muscle_radius_mm", "rest_length_mm"):
         _in_range(src, "joint", name, getattr(joint, name), 1e-6, 1e6)
+    _in_range(src, "joint", "return_stiffness_nm_per_rad", joint.return_stiffness_nm_per_rad, 0.0, 1e6)
     if not joint.tondu_a > joint.tondu_b > 0 or joint.tondu_k <= 0:
         raise ConfigError(f"{src}: [joint] needs tondu_a > tondu_b > 0 and tondu_k > 0 (Tondu-Lopez, seed 004 eq 1)")
     if config.rig.is_joint:

@@ -182,8 +182,8 @@ class EdgeRuntime:
         self.config, self.bundle, self.reference = config, bundle, reference
         spec = config.rig
         self.unit = spec.output_unit
-        if bundle is not None:
-            bundle.require_units("bar", self.unit)
+        if bundle is not None:  # a joint's model maps desired to commanded angle (edge.control.joint)
+            bundle.require_units("deg" if spec.is_joint else "bar", self.unit)
         correction = None
         if use_correction and bundle is not None and bundle.correction_path is not None and not spec.is_joint:
             from edge.control.neural import NeuralCorrection
@@ -195,7 +195,7 @@ class EdgeRuntime:
         self.controller: Controller | JointController
         if spec.is_joint:
             j = config.joint
-            gains = PIDGains(j.kp_bar_per_deg, j.ki_bar_per_deg_s, j.kd_bar_s_per_deg, j.derivative_filter_s)
+            gains = PIDGains(j.kp, j.ki_per_s, j.kd_s, j.derivative_filter_s)
             self.controller = JointController(reference, gains, j, inverse, limits)
         else:
             gains = PIDGains(c.kp_bar_per_mm, c.ki_bar_per_mm_s, c.kd_bar_s_per_mm, c.derivative_filter_s)

@@ -9,7 +9,9 @@ and the reason is kept. ``SAFE`` is latched: only :meth:`Supervisor.reset` leave
 
 A stuck sensor stays in range, so range checks miss it: a reading that has not changed by a
 single bit for ``stuck_window_s`` while the command swept more than ``stuck_command_span_bar``
-is declared stuck (a live sensor on a moving muscle always shows at least its noise).
+is declared stuck (a live sensor on a moving muscle always shows at least its noise). On a
+joint the swept command is the differential pressure: raising both muscles together moves no
+angle, and an encoder at rest reads the same count.
 """
 
 from __future__ import annotations
@@ -159,6 +161,8 @@ class Supervisor:
     def __post_init__(self) -> None:
         self._period_us = self.period_s * 1e6
         lim = self.limits
+        # the command whose sweep must move the output: a joint's co-contraction moves no angle
+        self._sweep_attr = "_last_diff_bar" if self.output_field == "angle_deg" else "_last_bar"
         if self.output_field == "angle_deg":
             self._y_range = (lim.angle_min_deg, lim.angle_max_deg, lim.tracking_error_max_deg, "angle", "deg")
         else:
@@ -265,7 +269,7 @@ class Supervisor:
                     return self.trip(frame, Fault.SENSOR_RANGE, f"{name} {value:.3g} outside {low:g}..{high:g}")
         if self._armed_at != self._armed_at:
             self._armed_at = t
-        last = controller._last_bar
+        last = getattr(controller, self._sweep_attr)
         stuck_y, stuck_p = self._stuck
         frozen = stuck_y.stuck_for(t, y, last)
         if frozen:
@@ -280,7 +284,7 @@ class Supervisor:
             return self.trip(
                 frame,
                 Fault.MODEL_OUTPUT,
-                f"model output not finite (feedforward {frame.u_ff_bar}, correction {frame.u_nn_bar})",
+                f"model output not finite (feedforward + correction {bias})",
             )
         if u - u != 0.0:
             return self.trip(frame, Fault.MODEL_OUTPUT, "control output is not finite")
