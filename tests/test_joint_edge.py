@@ -26,6 +26,7 @@ from tests.joint_helpers import (
 )
 
 RUN_URL = "sim://joint?clock=lockstep&seed=3"
+EQ8 = {"feedback": "eq8", "kp": 1.0, "ki_per_s": 10.0}  # seed 003 eq 8's sum, at its best gains
 ADC_DEG = 2e-3 * 54.545454  # one ADS1015 count at 4.096 V full scale, in deg of the angle channel
 
 
@@ -91,20 +92,20 @@ def test_bundles_in_the_wrong_units_are_refused(bundle):
         runtime(bundle, config=rig_config())  # the joint's map on the single muscle
 
 
-def sine_table(bundle: Path, tmp_path: Path) -> dict[str, dict[str, float]]:
+def sine_table(bundle: Path, tmp_path: Path, **joint: object) -> dict[str, dict[str, float]]:
     table = {}
     for name, feedforward in (("PID", False), ("PID + inverse Preisach", True)):
-        run = run_joint(
-            bundle, JOINT_SINE, tmp_path / f"{feedforward}.pmt", 20.0, feedforward, 5.0, joint_config(RUN_URL)
-        )
+        config = joint_config(RUN_URL, joint=joint)
+        run = run_joint(bundle, JOINT_SINE, tmp_path / f"{feedforward}.pmt", 20.0, feedforward, 5.0, config)
         assert run.summary["faults"] == []
         table[name] = {k: float(run.summary[k]) for k in ("max_error", "mean_abs_error", "rms_error")}  # type: ignore[arg-type]
     return table
 
 
-def test_feedforward_halves_the_sine_tracking_error(bundle, tmp_path):
+@pytest.mark.parametrize("joint", [{}, EQ8], ids=["through_model", "eq8"])
+def test_feedforward_halves_the_sine_tracking_error(bundle, tmp_path, joint):
     """Seed 003's tracking comparison: 15 sin(2 pi 0.2 t) deg, scored after 5 s."""
-    table = sine_table(bundle, tmp_path)
+    table = sine_table(bundle, tmp_path, **joint)
     pid, ff = table["PID"], table["PID + inverse Preisach"]
     print("\n| | max [deg] | mean abs [deg] | RMS [deg] |\n|---|---:|---:|---:|")
     for name, row in table.items():
@@ -113,12 +114,10 @@ def test_feedforward_halves_the_sine_tracking_error(bundle, tmp_path):
     assert ff["max_error"] < pid["max_error"] and ff["mean_abs_error"] < pid["mean_abs_error"]
 
 
-def step_runs(bundle: Path, tmp_path: Path, start: float, target: float) -> dict[bool, JointRun]:
+def step_runs(bundle: Path, tmp_path: Path, start: float, target: float, **joint: object) -> dict[bool, JointRun]:
     reference = precondition_and_step(tmp_path / "step.csv", start, target)
-    return {
-        ff: run_joint(bundle, reference, tmp_path / f"step{ff}.pmt", 10.0, ff, 6.0, joint_config(RUN_URL))
-        for ff in (False, True)
-    }
+    config = joint_config(RUN_URL, joint=joint)
+    return {ff: run_joint(bundle, reference, tmp_path / f"step{ff}.pmt", 10.0, ff, 6.0, config) for ff in (False, True)}
 
 
 @pytest.mark.parametrize(("start", "target"), [(0.0, -15.0), (-10.0, 10.0)])
@@ -130,14 +129,15 @@ def test_step_responses_feedforward_rises_faster(bundle, tmp_path, start, target
     assert all(r.summary["faults"] == [] for r in runs.values())
     assert ff.rise_s < pid.rise_s
     assert pid.steady_error_deg < 3 * ADC_DEG and ff.steady_error_deg < 3 * ADC_DEG
+    # the issue's target, within one converter count (both overshoots are a fraction of one here)
+    assert ff.overshoot_deg <= pid.overshoot_deg + ADC_DEG
 
 
-@pytest.mark.xfail(
-    strict=True, reason="target not met: the integrator carries a memory offset across the step (README)"
-)
-def test_step_overshoot_with_feedforward_is_no_larger(bundle, tmp_path):
-    runs = step_runs(bundle, tmp_path, 0.0, -15.0)
+@pytest.mark.xfail(strict=True, reason="not met with eq 8's sum: the integrator carries a memory offset (README)")
+def test_step_overshoot_with_eq8_feedforward_is_no_larger(bundle, tmp_path):
+    runs = step_runs(bundle, tmp_path, 0.0, -15.0, **EQ8)
     pid, ff = (step_metrics(runs[f], 0.0, -15.0, 6.0) for f in (False, True))
+    print(f"\neq 8, step +0 -> -15 deg: PID {pid}; PID + FF {ff}")
     assert ff.overshoot_deg <= pid.overshoot_deg + ADC_DEG
 
 

@@ -13,6 +13,10 @@ with the desired angle ``theta_d`` [deg]:
    ``u(k) = u_IPM(k) + K_P e(k) + K_I sum e + K_D (e(k) - e(k-q))``; here the derivative acts
    on the filtered measurement, with anti-windup, :class:`edge.control.pid.PID`). Without a
    model ("PID alone") ``u_ff = 0``;
+   With ``through_model`` the PID's output moves the desired angle instead and the sum goes
+   through the inverse model, ``theta_c = IPM(theta_d + PID(e))``: the model's memory then sees
+   exactly what the joint is commanded, so the integrator carries no memory offset across a
+   reversal (eq 8's sum lets it, which shows as a held overshoot after steps);
 3. static inversion (seed 003 Fig 4) of the commanded angle ``theta_c = u_ff + u_fb``: each
    muscle's contraction from the pulley (``x_A = x_0 + r theta_c``, ``x_B = x_0 - r theta_c``),
    forces ``F_A,B = F_0 +- K theta_c / (2 r)`` (a common pretension force ``F_0`` plus what holds
@@ -112,6 +116,8 @@ class JointController:
         model: the joint's statics (:class:`JointModel`).
         inverse: the inverse Preisach table (desired -> commanded angle, deg) or None: PID alone.
         limits: each valve's pressure range and slew rate.
+        through_model: the PID's output goes through the inverse model (module docstring)
+            instead of being added to its output (seed 003 eq 8).
     """
 
     correction = None  # no learned correction on the joint
@@ -123,8 +129,10 @@ class JointController:
         model: JointModel,
         inverse: CompiledModel | None = None,
         limits: Limits | None = None,
+        through_model: bool = False,
     ) -> None:
         self.reference = reference
+        self.through_model = through_model and inverse is not None
         self.limits = limits or Limits()
         self.inverse = inverse
         self.statics = StaticInversion(model)
@@ -145,12 +153,20 @@ class JointController:
     def fill_from(self, frame: Any, dt: float, t: float, y: float, p: float) -> float:
         """Fill the command fields of ``frame`` for angle ``y`` [deg]; returns valve A's command."""
         reference = self.reference_mm_ = self.reference(t)
-        feedforward = self.bias_bar_ = self.inverse.step(reference) if self.inverse is not None else 0.0
+        inverse = self.inverse
+        if self.through_model and inverse is not None:
+            shifted = self.pid.step(reference, y, dt, reference)  # theta_d + PID(e)
+            commanded = self.bias_bar_ = inverse.step(shifted)
+            feedforward = commanded - (shifted - reference)  # so that u_ff + u_fb = theta_c
+        else:
+            feedforward = self.bias_bar_ = inverse.step(reference) if inverse is not None else 0.0
+            commanded = math.nan
         if not math.isfinite(feedforward):
             frame.reference_deg, frame.u_ff_deg, frame.u_fb_deg = reference, feedforward, 0.0
             frame.u_bar = frame.valve_b_bar = math.nan
             return math.nan
-        commanded = self.pid.step(reference, y, dt, feedforward)
+        if commanded != commanded:
+            commanded = self.pid.step(reference, y, dt, feedforward)
         p_a, p_b = self.statics(commanded)
         lim = self.limits
         step = lim.slew_bar_per_s * dt

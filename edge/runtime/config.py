@@ -67,6 +67,7 @@ class JointSection(JointModel):
     ki_per_s: float = 10.0
     kd_s: float = 0.0
     derivative_filter_s: float = 0.005
+    feedback: str = "eq8"  # "eq8": u_IPM + PID; "through_model": IPM(theta_d + PID) (edge.control.joint)
 
 
 @dataclass(frozen=True)
@@ -260,6 +261,8 @@ def _check_values(config: RigConfig) -> None:
     for name in ("kp", "ki_per_s", "kd_s"):
         _in_range(src, "joint", name, getattr(joint, name), 0.0, 1e4, "; a negative gain drives the joint away")
     _in_range(src, "joint", "derivative_filter_s", joint.derivative_filter_s, 1e-6, 10.0)
+    if joint.feedback not in ("eq8", "through_model"):
+        raise ConfigError(f'{src}: [joint] feedback = {joint.feedback!r}; use "eq8" or "through_model"')
     for name in ("pulley_radius_mm", "pretension_n", "pretension_bar", "muscle_radius_mm", "rest_length_mm"):
         _in_range(src, "joint", name, getattr(joint, name), 1e-6, 1e6)
     _in_range(src, "joint", "return_stiffness_nm_per_rad", joint.return_stiffness_nm_per_rad, 0.0, 1e6)

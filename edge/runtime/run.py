@@ -196,7 +196,7 @@ class EdgeRuntime:
         if spec.is_joint:
             j = config.joint
             gains = PIDGains(j.kp, j.ki_per_s, j.kd_s, j.derivative_filter_s)
-            self.controller = JointController(reference, gains, j, inverse, limits)
+            self.controller = JointController(reference, gains, j, inverse, limits, j.feedback == "through_model")
         else:
             gains = PIDGains(c.kp_bar_per_mm, c.ki_bar_per_mm_s, c.kd_bar_s_per_mm, c.derivative_filter_s)
             self.controller = Controller(reference, gains, inverse, limits, correction)
