@@ -5,6 +5,10 @@ sit at the addresses the config's devices name, its sensors are wired as the con
 table says (``volts = value / scale + zero``, the inverse of the edge's calibration) and its
 valve takes the ``valve`` channel's bar per volt, so the calibration lives in one place.
 
+``sim://joint`` is the antagonistic joint instead (:mod:`hil.joint_rig`): channels ``angle``
+[deg], ``pressure`` and ``pressure_b`` [bar] on the ADC, ``valve`` and ``valve_b`` on two
+MCP4725 (each at the address its device names); effects ``none`` and ``transport_delay``.
+
 URL options (``sim://rig?effect=creep&seed=3&clock=realtime&faults=dac_nack@2.0,estop@3``):
 ``effect`` (a plant effect of :mod:`hil.effects`), ``seed``, ``clock`` (``lockstep``, the
 default, or ``realtime``), ``faults`` (:mod:`hil.faults`), ``adc`` (checked against the ADC's
@@ -13,6 +17,7 @@ driver). A bus table may also give ``faults = ["dac_nack@2.0", ...]``.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
@@ -21,7 +26,7 @@ import numpy as np
 from edge.errors import ConfigError
 from edge.hal.clock import MonotonicClock
 from edge.runtime.config import RigConfig
-from edge.runtime.rigspec import ANALOG_IN, BusSpec
+from edge.runtime.rigspec import ANALOG_IN, BusSpec, DeviceSpec
 from hil.effects import EFFECTS, apply_effect
 from hil.faults import FaultSchedule, parse_faults
 from hil.plant import PlantParams
@@ -34,7 +39,9 @@ QUANTITIES = {
     "load": "load_kg",
     "temperature": "temperature_c",
 }
+JOINT_QUANTITIES = {"angle": "angle_deg", "pressure": "pressure_bar", "pressure_b": "pressure_b_bar"}
 ADC_DRIVERS = {"ads1115": "ADS1115", "ads1015": "ADS1015"}
+RIGS = ("rig", "joint")
 
 
 class _SimGpioChip:
@@ -96,19 +103,24 @@ def wiring_from_config(config: RigConfig, devices: set[str]) -> Wiring:
     return _wiring(config, devices)
 
 
-def _wiring(config: RigConfig, sim_devices: set[str]) -> Wiring:
+def _wiring(config: RigConfig, sim_devices: set[str], kind: str = "rig") -> Wiring:
     sensors = {}
+    quantities = JOINT_QUANTITIES if kind == "joint" else QUANTITIES
     for channel in config.rig.channels:
         if channel.kind != ANALOG_IN or channel.device not in sim_devices:
             continue
-        quantity = QUANTITIES.get(channel.name)
+        quantity = quantities.get(channel.name)
         if quantity is None:
             raise ConfigError(
-                f"{config.source}: [channels.{channel.name}] sim:// emulates {', '.join(QUANTITIES)} sensors only"
+                f"{config.source}: [channels.{channel.name}] sim://{kind} emulates {', '.join(quantities)} sensors only"
             )
         sensors[int(channel.input or 0)] = Sensor(quantity, channel.scale, channel.zero)
-    valve = config.rig.channel("valve")
-    return Wiring(sensors or DEFAULT_WIRING.sensors, valve.scale if valve else DEFAULT_WIRING.valve_bar_per_volt)
+    valve, valve_b = config.rig.channel("valve"), config.rig.channel("valve_b")
+    return Wiring(
+        sensors or DEFAULT_WIRING.sensors,
+        valve.scale if valve else DEFAULT_WIRING.valve_bar_per_volt,
+        valve_b.scale if valve_b else DEFAULT_WIRING.valve_b_bar_per_volt,
+    )
 
 
 def open_sim(buses: list[BusSpec], config: RigConfig) -> SimRig:
@@ -116,9 +128,15 @@ def open_sim(buses: list[BusSpec], config: RigConfig) -> SimRig:
     source = config.source
     query, fault_items = _query(buses, source)
     names = {b.name for b in buses}
+    kinds = {b.path for b in buses}
+    if len(kinds) > 1 or not kinds <= set(RIGS):
+        raise ConfigError(f"{source}: sim:// buses name {sorted(kinds)}; use sim://rig or sim://joint for all of them")
+    kind = kinds.pop()
     devices = [d for d in config.rig.devices if d.bus in names]
     adcs = [d for d in devices if d.driver in ADC_DRIVERS]
     dacs = [d for d in devices if d.driver == "mcp4725"]
+    if kind == "joint":
+        return _open_joint(config, query, fault_items, buses, adcs, dacs)
     if len(adcs) > 1 or len(dacs) > 1:
         raise ConfigError(f"{source}: sim:// emulates one ADC and one DAC; the config has {len(adcs)} and {len(dacs)}")
     variant = ADC_DRIVERS[adcs[0].driver] if adcs else "ADS1115"
@@ -157,3 +175,62 @@ def open_sim(buses: list[BusSpec], config: RigConfig) -> SimRig:
     if schedule is not None:
         rig.gpio.before_access.append(lambda: schedule.apply_due(rig.clock.now()))
     return SimRig(rig, clock_mode == "lockstep", truth, schedule)
+
+
+def _open_joint(
+    config: RigConfig,
+    query: dict[str, str],
+    fault_items: list[str],
+    buses: list[BusSpec],
+    adcs: list[DeviceSpec],
+    dacs: list[DeviceSpec],
+) -> SimRig:
+    """``sim://joint``: the antagonistic joint of :mod:`hil.joint_rig`."""
+    from hil.joint import JointParams
+    from hil.joint_record import JOINT_EFFECTS
+    from hil.joint_rig import DAC_B_ADDRESS, JointHilRig
+
+    source = config.source
+    valve, valve_b = config.rig.channel("valve"), config.rig.channel("valve_b")
+    if len(adcs) != 1 or valve is None or valve_b is None:
+        raise ConfigError(
+            f"{source}: sim://joint emulates one ADC and two valves (channels valve and valve_b); "
+            "see docs/examples/hil-joint.toml"
+        )
+    effect = query.get("effect", "none")
+    if effect not in JOINT_EFFECTS:
+        raise ConfigError(f"{source}: sim://joint effect {effect!r} unknown; use one of {list(JOINT_EFFECTS)}")
+    clock_mode = query.get("clock", "lockstep")
+    if clock_mode not in ("lockstep", "realtime"):
+        raise ConfigError(f"{source}: sim:// clock={clock_mode!r}; use lockstep or realtime")
+    try:
+        seed = int(query.get("seed", "0"))
+    except ValueError as exc:
+        raise ConfigError(f"{source}: sim:// seed={query['seed']!r} is not an integer") from exc
+    variant = ADC_DRIVERS[adcs[0].driver]
+    faults = parse_faults(fault_items, source)
+    hz = next((b.options["hz"] for b in buses if "hz" in b.options), None)
+    joint = JointParams()
+    muscle, truth = apply_effect(effect, joint.muscle, np.random.default_rng(seed), 3600.0)
+    rig = JointHilRig(
+        replace(joint, muscle=muscle),
+        clock=MonotonicClock() if clock_mode == "realtime" else None,
+        seed=seed,
+        adc_variant=variant,
+        bus_hz=float(hz) if isinstance(hz, int | float) else None,
+        wiring=_wiring(config, {d.name for d in [*adcs, *dacs]}, "joint"),
+    )
+    by_name = {d.name: d for d in dacs}
+    dac_a, dac_b = by_name.get(valve.device), by_name.get(valve_b.device)
+    if dac_a is None or dac_b is None or dac_a is dac_b:
+        raise ConfigError(f"{source}: sim://joint needs valve and valve_b on two mcp4725 devices")
+    adc_address = adcs[0].address if adcs[0].address is not None else 0x48
+    dac_address = dac_a.address if dac_a.address is not None else 0x60
+    rig.bus.devices.clear()
+    rig.bus.attach(adc_address, rig.adc)
+    rig.bus.attach(dac_address, rig.dac)
+    rig.bus.attach(dac_b.address if dac_b.address is not None else DAC_B_ADDRESS, rig.dac_b)
+    schedule = FaultSchedule(rig, faults, adc_address, dac_address) if faults else None
+    if schedule is not None:
+        rig.gpio.before_access.append(lambda: schedule.apply_due(rig.clock.now()))
+    return SimRig(rig, clock_mode == "lockstep", {**truth, "rig": "joint"}, schedule)

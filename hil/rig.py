@@ -37,7 +37,7 @@ DAC_ADDRESS = 0x60
 PRESSURE_CHANNEL = 0
 DISPLACEMENT_CHANNEL = 1
 ADC_VDD = 3.3
-NOISE = {"pressure_bar": 0.004, "contraction_mm": 0.03, "load_kg": 0.01, "temperature_c": 0.05}
+NOISE = {"pressure_bar": 0.004, "contraction_mm": 0.03, "load_kg": 0.01, "temperature_c": 0.05, "pressure_b_bar": 0.004}
 
 
 @dataclass(frozen=True)
@@ -68,6 +68,7 @@ class Wiring:
         }
     )
     valve_bar_per_volt: float = 2.0  # proportional valve: 0-5 V -> 0-10 bar
+    valve_b_bar_per_volt: float = 2.0  # the joint's second valve (hil.joint_rig)
 
 
 DEFAULT_WIRING = Wiring()

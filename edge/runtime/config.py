@@ -21,6 +21,7 @@ import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from edge.control.joint import JointModel
 from edge.drivers.base import DriverClass, channel_kinds, installed_drivers
 from edge.errors import ConfigError
 from edge.runtime.legacy_config import is_legacy, translate_legacy
@@ -57,6 +58,19 @@ class ControlSection:
 
 
 @dataclass(frozen=True)
+class JointSection(JointModel):
+    """An antagonistic joint's statics (:class:`edge.control.joint.JointModel`: mm, N, bar,
+    N m/rad, Tondu-Lopez a, b, k) and its angle PID, whose output is a commanded angle: deg per
+    deg of error (kp), per deg s (ki_per_s), s (kd_s). Used when the rig has an ``angle`` channel."""
+
+    kp: float = 1.0
+    ki_per_s: float = 10.0
+    kd_s: float = 0.0
+    derivative_filter_s: float = 0.005
+    feedback: str = "eq8"  # "eq8": u_IPM + PID; "through_model": IPM(theta_d + PID) (edge.control.joint)
+
+
+@dataclass(frozen=True)
 class TelemetrySection:
     ring_ticks: int = 65_536
     flush_interval_s: float = 0.1
@@ -78,6 +92,7 @@ class RigConfig:
     control: ControlSection = field(default_factory=ControlSection)
     safety: SafetyLimits = field(default_factory=SafetyLimits)
     telemetry: TelemetrySection = field(default_factory=TelemetrySection)
+    joint: JointSection = field(default_factory=JointSection)
     bundle_trusted_keys: tuple[Path, ...] = ()
     source: str = "<config>"
 
@@ -95,6 +110,7 @@ SECTIONS: dict[str, type] = {
     "control": ControlSection,
     "safety": SafetyLimits,
     "telemetry": TelemetrySection,
+    "joint": JointSection,
     "bundle": BundleSection,
 }
 RIG_SECTIONS = ("buses", "devices", "channels")
@@ -227,6 +243,8 @@ def _check_values(config: RigConfig) -> None:
     _in_range(src, "control", "pressure_min_bar", control.pressure_min_bar, 0.0, 100.0)
     _check_ordered(src, "control", "pressure_min_bar", control.pressure_min_bar, control.pressure_max_bar)
     _check_ordered(src, "safety", "contraction_min_mm", safety.contraction_min_mm, safety.contraction_max_mm)
+    _check_ordered(src, "safety", "angle_min_deg", safety.angle_min_deg, safety.angle_max_deg)
+    _in_range(src, "safety", "tracking_error_max_deg", safety.tracking_error_max_deg, 0.01, 360.0)
     _in_range(src, "safety", "pressure_max_bar", safety.pressure_max_bar, 0.01, 100.0)
     _in_range(src, "safety", "tracking_error_max_mm", safety.tracking_error_max_mm, 0.01, 1e4)
     _in_range(src, "safety", "tracking_grace_s", safety.tracking_grace_s, 0.0, 3600.0)
@@ -239,6 +257,22 @@ def _check_values(config: RigConfig) -> None:
             f"{src}: [control] pressure_max_bar {control.pressure_max_bar} exceeds [safety] pressure_max_bar "
             f"{safety.pressure_max_bar}; the controller would trip its own overpressure limit"
         )
+    joint = config.joint
+    for name in ("kp", "ki_per_s", "kd_s"):
+        _in_range(src, "joint", name, getattr(joint, name), 0.0, 1e4, "; a negative gain drives the joint away")
+    _in_range(src, "joint", "derivative_filter_s", joint.derivative_filter_s, 1e-6, 10.0)
+    if joint.feedback not in ("eq8", "through_model"):
+        raise ConfigError(f'{src}: [joint] feedback = {joint.feedback!r}; use "eq8" or "through_model"')
+    for name in ("pulley_radius_mm", "pretension_n", "pretension_bar", "muscle_radius_mm", "rest_length_mm"):
+        _in_range(src, "joint", name, getattr(joint, name), 1e-6, 1e6)
+    _in_range(src, "joint", "return_stiffness_nm_per_rad", joint.return_stiffness_nm_per_rad, 0.0, 1e6)
+    if not joint.tondu_a > joint.tondu_b > 0 or joint.tondu_k <= 0:
+        raise ConfigError(f"{src}: [joint] needs tondu_a > tondu_b > 0 and tondu_k > 0 (Tondu-Lopez, seed 004 eq 1)")
+    if config.rig.is_joint:
+        try:
+            joint.mount_contraction_mm()
+        except ValueError as exc:
+            raise ConfigError(f"{src}: [joint] {exc}") from exc
     _in_range(src, "telemetry", "flush_interval_s", telemetry.flush_interval_s, 1e-3, 10.0)
     row_bytes = 8 * (8 + len(config.rig.channels)) + 8 * (1 + len(config.rig.devices))
     most = RING_BYTES_MAX // row_bytes

@@ -5,7 +5,9 @@ memory is a numpy structured row (:attr:`FrameLayout.dtype`, :meth:`FrameLayout.
 which telemetry copies whole. Fields, in order:
 
 * ``t`` [s], ``lateness_us``, ``reference_mm``, ``u_ff_bar`` / ``u_nn_bar`` / ``u_fb_bar``
-  (feedforward, neural correction, feedback), ``u_bar`` (the valve command, 0 when vented);
+  (feedforward, neural correction, feedback), ``u_bar`` (the valve command, 0 when vented); on
+  a joint ``reference_deg``, ``u_ff_deg`` / ``u_fb_deg`` (commanded angles) and ``u_bar`` (valve
+  A; valve B is its ``valve_b_bar`` channel field);
 * one field per channel (``contraction_mm``, ``pressure_bar``, ``estop``, ``valve_enable``,
   ``load_N``...), NaN when its device could not be read this tick;
 * ``state`` and ``fault`` codes (:class:`edge.runtime.safety.State` order, ``Fault`` values);
@@ -24,6 +26,8 @@ import numpy as np
 from edge.runtime.rigspec import RigSpec
 
 CONTROL_FIELDS = ("t", "lateness_us", "reference_mm", "u_ff_bar", "u_nn_bar", "u_fb_bar", "u_bar")
+# a joint's feedforward and feedback are commanded angles (edge.control.joint); u_bar is valve A
+JOINT_CONTROL_FIELDS = ["t", "lateness_us", "reference_deg", "u_ff_deg", "u_fb_deg", "u_bar"]
 CODE_FIELDS = ("state", "fault")
 
 
@@ -63,9 +67,9 @@ class FrameLayout:
 
 def frame_layout(rig: RigSpec) -> FrameLayout:
     """The frame of ``rig`` (see the module docstring)."""
-    floats = list(CONTROL_FIELDS)
+    floats = JOINT_CONTROL_FIELDS if rig.is_joint else list(CONTROL_FIELDS)
     channel_fields = []
-    for always in ("contraction_mm", "pressure_bar", "estop", "valve_enable"):  # the controller's
+    for always in (rig.output_field, "pressure_bar", "estop", "valve_enable"):  # the controller's
         if always not in {c.field for c in rig.channels}:
             floats.append(always)
             channel_fields.append(always)

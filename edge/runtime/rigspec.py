@@ -12,6 +12,9 @@
   ``pressure`` [bar] (optional), ``valve`` [bar per volt of command], ``valve_enable`` and
   ``estop``; any other channel (a load cell, a temperature, a second muscle's sensors) is read,
   range-checked and logged each tick.
+* An antagonistic joint (two muscles on a pulley) has ``angle`` [deg] instead of
+  ``contraction``, a second valve ``valve_b`` [bar per volt] and optionally ``pressure_b``
+  [bar]: the same loop with a joint control law (:mod:`edge.control.joint`).
 
 The same table is the HIL's wiring: the emulated sensors produce ``value / scale + zero`` volts.
 """
@@ -29,6 +32,9 @@ ANALOG_OUT = "analog_out"
 LINE_IN = "line_in"
 LINE_OUT = "line_out"
 REQUIRED_CHANNELS = {"contraction": "mm", "valve": "bar", "estop": None, "valve_enable": None}
+JOINT_REQUIRED_CHANNELS = {"angle": "deg", "valve": "bar", "valve_b": "bar", "estop": None, "valve_enable": None}
+FIXED_UNITS = {"pressure": "bar", "pressure_b": "bar", "angle": "deg", "valve_b": "bar"}
+OUTPUT_CHANNELS = ("valve", "valve_b", "valve_enable")
 BUS_SCHEMES = ("i2c", "serial", "gpiochip", "sim")
 NAME_CHARS = set("abcdefghijklmnopqrstuvwxyz0123456789_")
 
@@ -105,6 +111,21 @@ class RigSpec:
 
     def channels_of(self, device: str) -> tuple[ChannelSpec, ...]:
         return tuple(c for c in self.channels if c.device == device)
+
+    @property
+    def is_joint(self) -> bool:
+        """An antagonistic joint: the controlled output is ``angle`` [deg], two valves."""
+        return self.channel("angle") is not None
+
+    @property
+    def output_unit(self) -> str:
+        """The unit of the controlled output: ``deg`` for a joint, else ``mm``."""
+        return "deg" if self.is_joint else "mm"
+
+    @property
+    def output_field(self) -> str:
+        """The frame field of the controlled output (``angle_deg`` or ``contraction_mm``)."""
+        return "angle_deg" if self.is_joint else "contraction_mm"
 
 
 def _table(raw: object, where: str, source: str) -> dict[str, object]:
@@ -185,7 +206,7 @@ def parse_rig(raw: dict[str, object], source: str, driver_kinds: dict[str, dict[
             raise ConfigError(
                 f"{source}: [{where}] device = {device!r} is not a declared device; have {sorted(device_driver)}"
             )
-        role = "output" if name in ("valve", "valve_enable") else "input"
+        role = "output" if name in OUTPUT_CHANNELS else "input"
         kind = driver_kinds[device_driver[str(device)]].get(role)
         if kind is None:
             raise ConfigError(
@@ -193,10 +214,10 @@ def parse_rig(raw: dict[str, object], source: str, driver_kinds: dict[str, dict[
             )
         if name in ("estop", "valve_enable"):
             kind = LINE_IN if role == "input" else LINE_OUT
-        unit = table.get("unit", REQUIRED_CHANNELS.get(name) or "")
+        unit = table.get("unit", REQUIRED_CHANNELS.get(name) or FIXED_UNITS.get(name) or "")
         if not isinstance(unit, str) or not set(unit) <= NAME_CHARS | set("ABCDEFGHIJKLMNOPQRSTUVWXYZ"):
             raise ConfigError(f"{source}: [{where}] unit = {unit!r} must be a plain word (mm, bar, N, degC)")
-        expected_unit = REQUIRED_CHANNELS.get(name) or {"pressure": "bar"}.get(name)
+        expected_unit = REQUIRED_CHANNELS.get(name) or FIXED_UNITS.get(name)
         if expected_unit and unit != expected_unit:
             raise ConfigError(f"{source}: [{where}] unit {unit!r}: the controller works in {expected_unit}")
         scale = _number(table, "scale", where, source, 1.0)
@@ -227,11 +248,15 @@ def parse_rig(raw: dict[str, object], source: str, driver_kinds: dict[str, dict[
             )
         )
     names = {c.name for c in channels}
-    missing = [n for n in REQUIRED_CHANNELS if n not in names]
-    if missing:
+    if "angle" in names and "contraction" in names:
         raise ConfigError(
-            f"{source}: [channels] {', '.join(missing)} missing; the loop needs {', '.join(REQUIRED_CHANNELS)}"
+            f"{source}: [channels] has both contraction and angle; a muscle controls contraction, a joint angle"
         )
+    required = JOINT_REQUIRED_CHANNELS if "angle" in names else REQUIRED_CHANNELS
+    missing = [n for n in required if n not in names]
+    if missing:
+        what = "the joint loop" if "angle" in names else "the loop"
+        raise ConfigError(f"{source}: [channels] {', '.join(missing)} missing; {what} needs {', '.join(required)}")
     fields = [c.field for c in channels]
     if len(set(fields)) != len(fields):
         raise ConfigError(f"{source}: [channels] two channels share a telemetry column: {sorted(fields)}")

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from edge.control.joint import JointController
 from edge.control.pid import PIDGains
 from edge.control.reference import Reference
 from edge.control.tick import Controller, Limits, Readings
@@ -67,13 +68,15 @@ class ErrorStats:
 
 @dataclass
 class RunSummary:
-    """What ``pmactl edge run --json`` prints (errors in mm)."""
+    """What ``pmactl edge run --json`` prints (errors in ``unit``: mm, deg on a joint)."""
 
     errors: ErrorStats
     lateness: dict[str, float]
     faults: list[str]
     notes: list[str] = field(default_factory=list)
     extra: dict[str, object] = field(default_factory=dict)
+
+    unit: str = "mm"
 
     def as_dict(self) -> dict[str, object]:
         return {
@@ -82,7 +85,7 @@ class RunSummary:
             "overruns": self.lateness["overruns"],
             "lateness_p99_us": self.lateness["lateness_p99_us"],
             "faults": self.faults,
-            "unit": "mm",
+            "unit": self.unit,
             "scored_ticks": self.errors.count,
             "lateness": self.lateness,
             "realtime": self.notes,
@@ -177,33 +180,38 @@ class EdgeRuntime:
         rig: Rig | None = None,
     ) -> None:
         self.config, self.bundle, self.reference = config, bundle, reference
-        if bundle is not None:
-            bundle.require_units("bar", "mm")
+        spec = config.rig
+        self.unit = spec.output_unit
+        if bundle is not None:  # a joint's model maps desired to commanded angle (edge.control.joint)
+            bundle.require_units("deg" if spec.is_joint else "bar", self.unit)
         correction = None
-        if use_correction and bundle is not None and bundle.correction_path is not None:
+        if use_correction and bundle is not None and bundle.correction_path is not None and not spec.is_joint:
             from edge.control.neural import NeuralCorrection
 
             correction = NeuralCorrection(bundle.correction_path, bundle.correction_spec or {})
         c = config.control
         inverse = bundle.inverse if feedforward and bundle is not None else None
-        self.controller = Controller(
-            reference,
-            PIDGains(c.kp_bar_per_mm, c.ki_bar_per_mm_s, c.kd_bar_s_per_mm, c.derivative_filter_s),
-            inverse,
-            Limits(c.pressure_min_bar, c.pressure_max_bar, c.slew_bar_per_s),
-            correction,
-        )
+        limits = Limits(c.pressure_min_bar, c.pressure_max_bar, c.slew_bar_per_s)
+        self.controller: Controller | JointController
+        if spec.is_joint:
+            j = config.joint
+            gains = PIDGains(j.kp, j.ki_per_s, j.kd_s, j.derivative_filter_s)
+            self.controller = JointController(reference, gains, j, inverse, limits, j.feedback == "through_model")
+        else:
+            gains = PIDGains(c.kp_bar_per_mm, c.ki_bar_per_mm_s, c.kd_bar_s_per_mm, c.derivative_filter_s)
+            self.controller = Controller(reference, gains, inverse, limits, correction)
         self.layout = frame_layout(config.rig)
         self.frame = self.layout.new()
-        limits = tuple(
+        channel_limits = tuple(
             (ch.field, ch.minimum, ch.maximum)
             for ch in config.rig.channels
             if ch.kind == ANALOG_IN and (math.isfinite(ch.minimum) or math.isfinite(ch.maximum))
         )
         self.rig = rig or open_rig(config, self.layout)
         self.supervisor = Supervisor(
-            self.controller, config.safety, self.layout.status_fields, limits, config.period_s,
-            device_errors=self.rig.errors,
+            self.controller, config.safety, self.layout.status_fields, channel_limits, config.period_s,
+            device_errors=self.rig.errors, output_field=spec.output_field,
+            vent_fields=tuple(ch.field for ch in spec.channels if ch.name == "valve_b"),
         )  # fmt: skip
         self.supervisor.bind(self.layout.status_view(self.frame))
         self.telemetry_path = (
@@ -286,9 +294,10 @@ class EdgeRuntime:
             if failed:
                 detail = "; ".join(f"{d}: {rig.errors.get(d, '')}" for d in failed)
                 raise BusError(5, f"cannot arm, the first read failed ({detail})")
-            self.supervisor.arm(Readings(frame.contraction_mm, frame.pressure_bar))
+            y0 = getattr(frame, config.rig.output_field)
+            self.supervisor.arm(Readings(y0, frame.pressure_bar))
             if telemetry:
-                telemetry.event(0.0, "arm", f"armed at {frame.contraction_mm:.2f} mm; {'; '.join(realtime.notes)}")
+                telemetry.event(0.0, "arm", f"armed at {y0:.2f} {self.unit}; {'; '.join(realtime.notes)}")
             n_max = int(math.ceil(duration / period)) + 1 if duration is not None else 0
             if self.profile:
                 self.phase_ns = np.zeros((max(n_max, 1), len(PHASES)), dtype=np.int64)
@@ -311,13 +320,13 @@ class EdgeRuntime:
             if telemetry:
                 if telemetry.failure is not None and telemetry.failure not in faults:
                     faults.append(telemetry.failure)
-                summary = RunSummary(errors, scheduler.stats.summary(), faults, realtime.notes, extra)
+                summary = RunSummary(errors, scheduler.stats.summary(), faults, realtime.notes, extra, self.unit)
                 telemetry.event(scheduler.index * period, "end", "end of run", summary=summary.as_dict())
                 telemetry.close()
                 if telemetry.failure is not None and telemetry.failure not in faults:
                     faults.append(telemetry.failure)  # the last drain failed
         extra = self._extra(telemetry)
-        return RunSummary(errors, scheduler.stats.summary(), faults, realtime.notes, extra)
+        return RunSummary(errors, scheduler.stats.summary(), faults, realtime.notes, extra, self.unit)
 
     def _extra(self, telemetry: TelemetryWriter | None) -> dict[str, object]:
         return {
@@ -347,6 +356,7 @@ class EdgeRuntime:
         clock_ns, cpu_ns = time.perf_counter_ns, time.thread_time_ns
         timed_cpu = profile == "cpu"  # the CPU clock calls inflate the wall phases: a separate run
         hooks = self.on_tick
+        reference_field, output_field = f"reference_{self.unit}", self.config.rig.output_field
         tick = 0
         streak = 0
         count, sum_sq, sum_abs, max_abs = errors.count, errors.sum_sq, errors.sum_abs, errors.max_abs
@@ -377,7 +387,7 @@ class EdgeRuntime:
                 t3 = clock_ns()
                 c3 = cpu_ns() if timed_cpu else 0
                 if frame.state == RUNNING_CODE and t >= settle:
-                    error = frame.reference_mm - frame.contraction_mm
+                    error = getattr(frame, reference_field) - getattr(frame, output_field)
                     if error == error:  # a held tick has no reading
                         count += 1
                         sum_sq += error * error

@@ -9,7 +9,9 @@ and the reason is kept. ``SAFE`` is latched: only :meth:`Supervisor.reset` leave
 
 A stuck sensor stays in range, so range checks miss it: a reading that has not changed by a
 single bit for ``stuck_window_s`` while the command swept more than ``stuck_command_span_bar``
-is declared stuck (a live sensor on a moving muscle always shows at least its noise).
+is declared stuck (a live sensor on a moving muscle always shows at least its noise). On a
+joint the swept command is the differential pressure: raising both muscles together moves no
+angle, and an encoder at rest reads the same count.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any
 
+from edge.control.joint import JointController
 from edge.control.tick import Command, Controller, Readings, ScratchFrame
 
 
@@ -64,6 +67,9 @@ class SafetyLimits:
     overrun_streak: int = 5
     stuck_window_s: float = 0.3
     stuck_command_span_bar: float = 0.5
+    angle_min_deg: float = -60.0  # a joint's angle range (rigs with an ``angle`` channel)
+    angle_max_deg: float = 60.0
+    tracking_error_max_deg: float = 20.0
 
 
 @dataclass(slots=True)
@@ -129,9 +135,12 @@ class Supervisor:
         status_fields: ``(device, read field, write field)`` of every device in the frame.
         channel_limits: ``(field, min, max)`` of further channels to range-check.
         period_s: the tick period [s] (lateness beyond it is an overrun).
+        output_field: the controlled output's frame field (``contraction_mm``; ``angle_deg``
+            on a joint, checked against the ``angle_*_deg`` limits).
+        vent_fields: further command fields zeroed on venting (a joint's second valve).
     """
 
-    controller: Controller
+    controller: Controller | JointController
     limits: SafetyLimits = field(default_factory=SafetyLimits)
     status_fields: tuple[tuple[str, str, str], ...] = ()
     channel_limits: tuple[tuple[str, float, float], ...] = ()
@@ -140,6 +149,8 @@ class Supervisor:
     fault: str | None = None
     fault_kind: Fault | None = None
     device_errors: dict[str, str] = field(default_factory=dict)  # latest message per device (runtime fills)
+    output_field: str = "contraction_mm"
+    vent_fields: tuple[str, ...] = ()
     _bus_errors: int = 0
     _overruns: int = 0
     _armed_at: float = math.nan
@@ -150,6 +161,14 @@ class Supervisor:
     def __post_init__(self) -> None:
         self._period_us = self.period_s * 1e6
         lim = self.limits
+        # the command whose sweep must move the output: a joint's co-contraction moves no angle
+        self._sweep_attr = "_last_diff_bar" if self.output_field == "angle_deg" else "_last_bar"
+        if self.output_field == "angle_deg":
+            self._y_range = (lim.angle_min_deg, lim.angle_max_deg, lim.tracking_error_max_deg, "angle", "deg")
+        else:
+            self._y_range = (
+                lim.contraction_min_mm, lim.contraction_max_mm, lim.tracking_error_max_mm, "contraction", "mm"
+            )  # fmt: skip
         self._stuck = (
             StuckDetector(lim.stuck_window_s, lim.stuck_command_span_bar),
             StuckDetector(lim.stuck_window_s, lim.stuck_command_span_bar),
@@ -177,6 +196,8 @@ class Supervisor:
 
     def _vent(self, frame: Any) -> None:
         frame.u_bar, frame.valve_enable = 0.0, 0.0
+        for name in self.vent_fields:
+            setattr(frame, name, 0.0)
         frame.state = STATE_CODES[self.state]
         frame.fault = self.fault_kind.value if self.fault_kind else 0
 
@@ -223,21 +244,21 @@ class Supervisor:
                 return self.trip(frame, Fault.OVERRUN, f"{self._overruns} consecutive deadline overruns")
         elif self._overruns:
             self._overruns = 0
-        t, y, p = frame.t, frame.contraction_mm, frame.pressure_bar
+        t, y, p = frame.t, getattr(frame, self.output_field), frame.pressure_bar
         controller = self.controller
         if failed is not None and y != y:  # the sensor's device failed this tick: hold
             frame.valve_enable = 1.0
             frame.u_bar = 0.0 if state is State.ARMED else controller._last_bar
             frame.state, frame.fault = STATE_CODES[state], 0
             return None
-        if not lim.contraction_min_mm <= y <= lim.contraction_max_mm:
+        y_min, y_max, track_max, label, unit = self._y_range
+        if not y_min <= y <= y_max:
             if y != y or y in (math.inf, -math.inf):
-                return self.trip(frame, Fault.SENSOR_NONFINITE, "contraction reading is not finite")
+                return self.trip(frame, Fault.SENSOR_NONFINITE, f"{label} reading is not finite")
             return self.trip(
                 frame,
                 Fault.SENSOR_RANGE,
-                f"contraction {y:.1f} mm outside {lim.contraction_min_mm}..{lim.contraction_max_mm} mm "
-                "(sensor disconnected or saturated?)",
+                f"{label} {y:.1f} {unit} outside {y_min}..{y_max} {unit} (sensor disconnected or saturated?)",
             )
         if p > lim.pressure_max_bar:
             return self.trip(frame, Fault.OVERPRESSURE, f"overpressure {p:.2f} bar > {lim.pressure_max_bar} bar")
@@ -248,11 +269,11 @@ class Supervisor:
                     return self.trip(frame, Fault.SENSOR_RANGE, f"{name} {value:.3g} outside {low:g}..{high:g}")
         if self._armed_at != self._armed_at:
             self._armed_at = t
-        last = controller._last_bar
+        last = getattr(controller, self._sweep_attr)
         stuck_y, stuck_p = self._stuck
         frozen = stuck_y.stuck_for(t, y, last)
         if frozen:
-            return self._stuck_trip(frame, "contraction", y, frozen)
+            return self._stuck_trip(frame, label, y, frozen)
         if p == p:
             frozen = stuck_p.stuck_for(t, p, last)
             if frozen:
@@ -263,17 +284,13 @@ class Supervisor:
             return self.trip(
                 frame,
                 Fault.MODEL_OUTPUT,
-                f"model output not finite (feedforward {frame.u_ff_bar}, correction {frame.u_nn_bar})",
+                f"model output not finite (feedforward + correction {bias})",
             )
         if u - u != 0.0:
             return self.trip(frame, Fault.MODEL_OUTPUT, "control output is not finite")
         error = controller.reference_mm_ - y
-        if (
-            error > lim.tracking_error_max_mm or -error > lim.tracking_error_max_mm
-        ) and t - self._armed_at >= lim.tracking_grace_s:
-            return self.trip(
-                frame, Fault.TRACKING, f"tracking error {abs(error):.1f} mm > {lim.tracking_error_max_mm} mm"
-            )
+        if (error > track_max or -error > track_max) and t - self._armed_at >= lim.tracking_grace_s:
+            return self.trip(frame, Fault.TRACKING, f"tracking error {abs(error):.1f} {unit} > {track_max} {unit}")
         self.state = State.RUNNING
         frame.valve_enable, frame.state, frame.fault = 1.0, RUNNING_CODE, 0
         return None

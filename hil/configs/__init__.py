@@ -6,3 +6,4 @@ from importlib import resources
 from pathlib import Path
 
 HIL_RIG_CONFIG = Path(str(resources.files(__package__) / "hil-rig.toml"))
+HIL_JOINT_CONFIG = Path(str(resources.files(__package__) / "hil-joint.toml"))

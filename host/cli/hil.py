@@ -37,12 +37,15 @@ def _record_joint(args: argparse.Namespace) -> int:
     from hil.joint_record import record_joint, write_joint_recording
 
     try:
-        recording = record_joint(args.scenario, args.seed, args.duration, args.effect, args.rate)
+        recording = record_joint(
+            args.scenario, args.seed, args.duration, args.effect, args.rate, command=args.joint_command
+        )
     except ValueError as exc:
         raise DataError(str(exc)) from exc
     path = write_joint_recording(recording, args.out)
     print(
-        f"wrote {path} (joint: {recording.t.size} samples at {args.rate:g} Hz, scenario {args.scenario}) "
+        f"wrote {path} (joint: {recording.t.size} samples at {args.rate:g} Hz, scenario {args.scenario}, "
+        f"u = {recording.truth['command']} [{recording.truth['u_unit']}]) "
         f"and {truth_path(path).name}"
     )
     return 0
