@@ -137,6 +137,13 @@ def test_demo_trained_correction_beats_feedforward_alone(demo):
     assert with_nn["rms_error"] < with_ff["rms_error"]
 
 
+def test_demo_joint_feedforward_halves_the_angle_error(demo):
+    """Seed 003's joint on the emulated rig: inverse-Preisach feedforward cuts RMS angle error >= 50 %."""
+    pid, with_ff = demo[0]["joint"]
+    assert pid["unit"] == "deg" and pid["faults"] == [] == with_ff["faults"]
+    assert with_ff["rms_error"] <= 0.5 * pid["rms_error"]
+
+
 def test_demo_writes_its_figures_and_bundles_into_out(demo):
     report, _, out = demo
     assert sorted(Path(f).name for f in report["figures"]) == ["loops.png", "tracking.png"]
