@@ -9,11 +9,14 @@ emulator with another seed (other sensor noise), in lockstep, 20 s of sine and 1
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pytest
 
+from edge.control.tick import Readings
 from edge.errors import BundleError, ConfigError
+from edge.runtime.safety import State
 from tests.edge_helpers import rig_config, runtime
 from tests.joint_helpers import (
     HIL_JOINT,
@@ -64,6 +67,29 @@ def test_an_estop_vents_both_valves(bundle):
     summary = rt.run(2.0)
     assert summary.faults and "e-stop" in summary.faults[0]
     assert rt.frame.u_bar == 0.0 and rt.frame.valve_b_bar == 0.0
+
+
+def test_overpressure_in_the_second_muscle_trips_and_vents_both_valves(bundle):
+    """Muscle B's pressure is held to pressure_max_bar like muscle A's (a review found it unchecked)."""
+    rt = runtime(bundle, "const:value=10", config=joint_config(RUN_URL))
+    frame, supervisor = rt.frame, rt.supervisor
+    supervisor.arm(Readings(0.0, 1.0))
+    frame.t, frame.angle_deg, frame.pressure_bar, frame.pressure_b_bar = 0.01, 0.0, 1.0, 25.0
+    frame.estop, frame.lateness_us = 0.0, 0.0
+    supervisor.step(frame, 0.002)
+    rt.rig.close()
+    assert supervisor.state is State.SAFE and "pressure_b" in str(supervisor.fault)
+    assert frame.u_bar == 0.0 and frame.valve_b_bar == 0.0 and frame.valve_enable == 0.0
+
+
+def test_every_joint_frame_starts_unread_and_has_only_its_own_columns():
+    """Building one joint layout must not change the next (a shared module list was appended to)."""
+    from edge.runtime.frame import frame_layout
+
+    config = joint_config(RUN_URL)
+    first, second = frame_layout(config.rig), frame_layout(config.rig)
+    assert first.dtype == second.dtype and first.channel_fields == second.channel_fields
+    assert math.isnan(second.new().angle_deg)
 
 
 def test_joint_config_mistakes_are_one_line():

@@ -27,7 +27,7 @@ from edge.runtime.rigspec import RigSpec
 
 CONTROL_FIELDS = ("t", "lateness_us", "reference_mm", "u_ff_bar", "u_nn_bar", "u_fb_bar", "u_bar")
 # a joint's feedforward and feedback are commanded angles (edge.control.joint); u_bar is valve A
-JOINT_CONTROL_FIELDS = ["t", "lateness_us", "reference_deg", "u_ff_deg", "u_fb_deg", "u_bar"]
+JOINT_CONTROL_FIELDS = ("t", "lateness_us", "reference_deg", "u_ff_deg", "u_fb_deg", "u_bar")
 CODE_FIELDS = ("state", "fault")
 
 
@@ -67,7 +67,7 @@ class FrameLayout:
 
 def frame_layout(rig: RigSpec) -> FrameLayout:
     """The frame of ``rig`` (see the module docstring)."""
-    floats = JOINT_CONTROL_FIELDS if rig.is_joint else list(CONTROL_FIELDS)
+    floats = list(JOINT_CONTROL_FIELDS if rig.is_joint else CONTROL_FIELDS)  # a copy: appended below
     channel_fields = []
     for always in (rig.output_field, "pressure_bar", "estop", "valve_enable"):  # the controller's
         if always not in {c.field for c in rig.channels}:

@@ -212,6 +212,7 @@ class EdgeRuntime:
             self.controller, config.safety, self.layout.status_fields, channel_limits, config.period_s,
             device_errors=self.rig.errors, output_field=spec.output_field,
             vent_fields=tuple(ch.field for ch in spec.channels if ch.name == "valve_b"),
+            pressure_fields=tuple(ch.field for ch in spec.channels if ch.name == "pressure_b"),
         )  # fmt: skip
         self.supervisor.bind(self.layout.status_view(self.frame))
         self.telemetry_path = (

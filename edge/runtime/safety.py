@@ -138,6 +138,8 @@ class Supervisor:
         output_field: the controlled output's frame field (``contraction_mm``; ``angle_deg``
             on a joint, checked against the ``angle_*_deg`` limits).
         vent_fields: further command fields zeroed on venting (a joint's second valve).
+        pressure_fields: further pressure fields [bar] held to ``pressure_max_bar`` (a joint's
+            second muscle).
     """
 
     controller: Controller | JointController
@@ -151,6 +153,7 @@ class Supervisor:
     device_errors: dict[str, str] = field(default_factory=dict)  # latest message per device (runtime fills)
     output_field: str = "contraction_mm"
     vent_fields: tuple[str, ...] = ()
+    pressure_fields: tuple[str, ...] = ()
     _bus_errors: int = 0
     _overruns: int = 0
     _armed_at: float = math.nan
@@ -249,6 +252,8 @@ class Supervisor:
         if failed is not None and y != y:  # the sensor's device failed this tick: hold
             frame.valve_enable = 1.0
             frame.u_bar = 0.0 if state is State.ARMED else controller._last_bar
+            for name in self.vent_fields:  # a joint's second valve holds as the first does
+                setattr(frame, name, 0.0 if state is State.ARMED else getattr(controller, "_last_b_bar", 0.0))
             frame.state, frame.fault = STATE_CODES[state], 0
             return None
         y_min, y_max, track_max, label, unit = self._y_range
@@ -262,6 +267,12 @@ class Supervisor:
             )
         if p > lim.pressure_max_bar:
             return self.trip(frame, Fault.OVERPRESSURE, f"overpressure {p:.2f} bar > {lim.pressure_max_bar} bar")
+        for name in self.pressure_fields:
+            q = getattr(frame, name)
+            if q > lim.pressure_max_bar:
+                return self.trip(
+                    frame, Fault.OVERPRESSURE, f"overpressure {name} {q:.2f} bar > {lim.pressure_max_bar} bar"
+                )
         if self.channel_limits:
             for name, low, high in self.channel_limits:
                 value = getattr(frame, name)
