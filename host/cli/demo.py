@@ -77,32 +77,56 @@ def identify(name: str, train: Measurement, test: Measurement, out: Path) -> tup
     return row, result.prediction.y, result.prediction.window_end
 
 
+def tracked_run(
+    config: Path,
+    bundle_dir: Path,
+    reference: str,
+    duration_s: float,
+    telemetry: Path,
+    label: str,
+    say: Callable[[str], None],
+    *,
+    feedforward: bool,
+    use_correction: bool = False,
+) -> dict[str, object]:
+    """One ``pmactl edge run`` on the emulated rig in lockstep; its summary row, also printed."""
+    # the demo's own output from its previous run (the edge never overwrites telemetry by itself)
+    for previous in (telemetry, telemetry.with_name(telemetry.name + ".events.jsonl")):
+        previous.unlink(missing_ok=True)
+    runtime = EdgeRuntime(
+        load_config(config),
+        load_bundle(bundle_dir),
+        parse_reference(reference),
+        settle_s=SETTLE_S,
+        telemetry_path=telemetry,
+        feedforward=feedforward,
+        use_correction=use_correction,
+    )
+    row: dict[str, object] = {"controller": label, **runtime.run(duration_s).as_dict()}
+    faults = row["faults"]
+    assert isinstance(faults, list)
+    say(
+        f"{label:<31} {row['max_error']:>9.2f} {row['mean_abs_error']:>14.2f} {row['rms_error']:>9.2f} {len(faults):>7}"
+    )
+    return row
+
+
 def closed_loop(bundle_dir: Path, out: Path, say: Callable[[str], None]) -> list[dict[str, object]]:
     """Seed 000 Table 5 on the emulated rig, one row per controller (errors in mm)."""
-    rows = []
-    for key, (label, feedforward, correction) in CONTROLLERS.items():
-        telemetry = out / f"tracking-{key}.pmt"
-        # the demo's own output from its previous run (the edge never overwrites telemetry by itself)
-        for previous in (telemetry, telemetry.with_name(telemetry.name + ".events.jsonl")):
-            previous.unlink(missing_ok=True)
-        runtime = EdgeRuntime(
-            load_config(HIL_RIG_CONFIG),
-            load_bundle(bundle_dir),
-            parse_reference(TRACKING),
+    return [
+        tracked_run(
+            HIL_RIG_CONFIG,
+            bundle_dir,
+            TRACKING,
+            TRACKING_S,
+            out / f"tracking-{key}.pmt",
+            label,
+            say,
             feedforward=feedforward,
             use_correction=correction,
-            settle_s=SETTLE_S,
-            telemetry_path=telemetry,
-        )
-        row = {"controller": label, **runtime.run(TRACKING_S).as_dict()}
-        faults = row["faults"]
-        assert isinstance(faults, list)
-        say(
-            f"{label:<31} {row['max_error']:>9.2f} {row['mean_abs_error']:>14.2f} {row['rms_error']:>9.2f} "
-            f"{len(faults):>7}"
-        )
-        rows.append(row)
-    return rows
+        )  # fmt: skip
+        for key, (label, feedforward, correction) in CONTROLLERS.items()
+    ]
 
 
 JOINT_TRACKING = "sine:amplitude=15,frequency=0.2,offset=0"  # deg
@@ -119,28 +143,19 @@ def joint_loop(out: Path, say: Callable[[str], None]) -> list[dict[str, object]]
     bundle_dir = save_bundle(estimator, train, out / "joint", ("deg", "deg"), {"model": "preisach"})
     say(f"  Everett map from {len(train)} samples of first-order descending curves: {bundle_dir}")
     say(f"{'controller':<31} {'max [deg]':>9} {'mean |e| [deg]':>14} {'RMS [deg]':>9} {'faults':>7}")
-    rows = []
-    for key, label, feedforward in (("pid", "PID", False), ("feedforward", "PID + inverse Preisach", True)):
-        telemetry = out / f"joint-{key}.pmt"
-        for previous in (telemetry, telemetry.with_name(telemetry.name + ".events.jsonl")):
-            previous.unlink(missing_ok=True)
-        runtime = EdgeRuntime(
-            load_config(HIL_JOINT_CONFIG),
-            load_bundle(bundle_dir),
-            parse_reference(JOINT_TRACKING),
+    return [
+        tracked_run(
+            HIL_JOINT_CONFIG,
+            bundle_dir,
+            JOINT_TRACKING,
+            JOINT_S,
+            out / f"joint-{key}.pmt",
+            label,
+            say,
             feedforward=feedforward,
-            settle_s=SETTLE_S,
-            telemetry_path=telemetry,
-        )
-        row = {"controller": label, **runtime.run(JOINT_S).as_dict()}
-        faults = row["faults"]
-        assert isinstance(faults, list)
-        say(
-            f"{label:<31} {row['max_error']:>9.2f} {row['mean_abs_error']:>14.2f} {row['rms_error']:>9.2f} "
-            f"{len(faults):>7}"
-        )
-        rows.append(row)
-    return rows
+        )  # fmt: skip
+        for key, label, feedforward in (("pid", "PID", False), ("feedforward", "PID + inverse Preisach", True))
+    ]
 
 
 def tracking_figure(out: Path, loop: list[dict[str, object]], reachable: tuple[float, float]) -> Path:
