@@ -98,6 +98,24 @@ def _query(buses: list[BusSpec], source: str) -> tuple[dict[str, str], list[str]
     return query, faults
 
 
+def _clock_and_seed(query: dict[str, str], source: str) -> tuple[bool, int]:
+    """(lockstep?, seed) from the sim:// URL's ``clock`` and ``seed`` options."""
+    clock_mode = query.get("clock", "lockstep")
+    if clock_mode not in ("lockstep", "realtime"):
+        raise ConfigError(f"{source}: sim:// clock={clock_mode!r}; use lockstep or realtime")
+    try:
+        seed = int(query.get("seed", "0"))
+    except ValueError as exc:
+        raise ConfigError(f"{source}: sim:// seed={query['seed']!r} is not an integer") from exc
+    return clock_mode == "lockstep", seed
+
+
+def _bus_hz(buses: list[BusSpec]) -> float | None:
+    """The I2C clock [Hz] a bus table gives (lockstep runs pay each transfer's wire time), if any."""
+    hz = next((b.options["hz"] for b in buses if "hz" in b.options), None)
+    return float(hz) if isinstance(hz, int | float) else None
+
+
 def wiring_from_config(config: RigConfig, devices: set[str]) -> Wiring:
     """The emulated sensors and valve wired as ``config``'s channels on ``devices`` say."""
     return _wiring(config, devices)
@@ -147,23 +165,16 @@ def open_sim(buses: list[BusSpec], config: RigConfig) -> SimRig:
     effect = query.get("effect", "none")
     if effect not in EFFECTS:
         raise ConfigError(f"{source}: sim:// effect {effect!r} unknown; use one of {list(EFFECTS)}")
-    clock_mode = query.get("clock", "lockstep")
-    if clock_mode not in ("lockstep", "realtime"):
-        raise ConfigError(f"{source}: sim:// clock={clock_mode!r}; use lockstep or realtime")
-    try:
-        seed = int(query.get("seed", "0"))
-    except ValueError as exc:
-        raise ConfigError(f"{source}: sim:// seed={query['seed']!r} is not an integer") from exc
+    lockstep, seed = _clock_and_seed(query, source)
     faults = parse_faults(fault_items, source)
-    hz = next((b.options["hz"] for b in buses if "hz" in b.options), None)
     params, truth = apply_effect(effect, PlantParams(), np.random.default_rng(seed), 3600.0)
-    clock = MonotonicClock() if clock_mode == "realtime" else None
+    clock = None if lockstep else MonotonicClock()
     rig = HilRig(
         params,
         clock=clock,
         seed=seed,
         adc_variant=variant,
-        bus_hz=float(hz) if isinstance(hz, int | float) else None,
+        bus_hz=_bus_hz(buses),
         wiring=_wiring(config, {d.name for d in devices}),
     )
     adc_address = adcs[0].address if adcs and adcs[0].address is not None else 0x48
@@ -174,7 +185,7 @@ def open_sim(buses: list[BusSpec], config: RigConfig) -> SimRig:
     schedule = FaultSchedule(rig, faults, adc_address, dac_address) if faults else None
     if schedule is not None:
         rig.gpio.before_access.append(lambda: schedule.apply_due(rig.clock.now()))
-    return SimRig(rig, clock_mode == "lockstep", truth, schedule)
+    return SimRig(rig, lockstep, truth, schedule)
 
 
 def _open_joint(
@@ -200,24 +211,17 @@ def _open_joint(
     effect = query.get("effect", "none")
     if effect not in JOINT_EFFECTS:
         raise ConfigError(f"{source}: sim://joint effect {effect!r} unknown; use one of {list(JOINT_EFFECTS)}")
-    clock_mode = query.get("clock", "lockstep")
-    if clock_mode not in ("lockstep", "realtime"):
-        raise ConfigError(f"{source}: sim:// clock={clock_mode!r}; use lockstep or realtime")
-    try:
-        seed = int(query.get("seed", "0"))
-    except ValueError as exc:
-        raise ConfigError(f"{source}: sim:// seed={query['seed']!r} is not an integer") from exc
+    lockstep, seed = _clock_and_seed(query, source)
     variant = ADC_DRIVERS[adcs[0].driver]
     faults = parse_faults(fault_items, source)
-    hz = next((b.options["hz"] for b in buses if "hz" in b.options), None)
     joint = JointParams()
     muscle, truth = apply_effect(effect, joint.muscle, np.random.default_rng(seed), 3600.0)
     rig = JointHilRig(
         replace(joint, muscle=muscle),
-        clock=MonotonicClock() if clock_mode == "realtime" else None,
+        clock=None if lockstep else MonotonicClock(),
         seed=seed,
         adc_variant=variant,
-        bus_hz=float(hz) if isinstance(hz, int | float) else None,
+        bus_hz=_bus_hz(buses),
         wiring=_wiring(config, {d.name for d in [*adcs, *dacs]}, "joint"),
     )
     by_name = {d.name: d for d in dacs}
@@ -233,4 +237,4 @@ def _open_joint(
     schedule = FaultSchedule(rig, faults, adc_address, dac_address) if faults else None
     if schedule is not None:
         rig.gpio.before_access.append(lambda: schedule.apply_due(rig.clock.now()))
-    return SimRig(rig, clock_mode == "lockstep", {**truth, "rig": "joint"}, schedule)
+    return SimRig(rig, lockstep, {**truth, "rig": "joint"}, schedule)
