@@ -1,0 +1,120 @@
+"""A second held-out plant family for ``pmactl diagnose``, never used for tuning.
+
+Four cores (:mod:`tests.plants.fresh_cores`), seven protocols (:mod:`tests.plants.fresh_protocols`),
+every effect in two forms unlike the first family's (:mod:`tests.plants.fresh_effects`), sample
+rates 50-500 Hz (80, 125, 250 and 400 Hz are new). Only numbers are reported from it.
+
+Every effect case is *visible*: its effect size (RMS [mm] of the noise-free output with the
+effect minus the same plant, protocol and seed with the effect switched off) lies in
+``[EFFECT_MIN_OVER_NOISE * noise, EFFECT_MAX_OVER_SPAN * span]``. The drawn intensity is kept when
+it lands there; otherwise it is scaled (at most 4x either way, recorded as
+``intensity_rescale`` in the truth) until it does.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from host.data import Measurement
+from tests.plants.family import Case
+from tests.plants.fresh_cores import FRESH_CORES, draw_fresh_params
+from tests.plants.fresh_effects import FRESH_FORMS, INTENSITY_KEY, columns, draw_effect_params, render
+from tests.plants.fresh_protocols import FRESH_PROTOCOLS, vented_full_cycle
+
+Array = NDArray[np.float64]
+FRESH_PLANTS = tuple(FRESH_CORES)
+FRESH_RATES_HZ = (80.0, 250.0, 50.0, 125.0, 500.0, 400.0)
+NOISE_MM = {"coleman_hodgdon": 0.02, "kp_sum": 0.04, "maxwell_slip_mass": 0.03, "pneumatic_chamber": 0.05}
+NONE_PER_PLANT = 5
+SEED_BASE = 7000
+EFFECT_MIN_OVER_NOISE = 5.0  # the brief asks >= 4x; 5x leaves room for the noise of the estimate
+EFFECT_MAX_OVER_SPAN = 0.12  # the brief asks <= ~15 %
+MAX_RESCALE = 4.0
+
+
+def fresh_cases(duration_s: float = 150.0) -> list[Case]:
+    """Every effect-form on every fresh core, plus :data:`NONE_PER_PLANT` effect-free records each.
+
+    Protocols (7) and rates (6) rotate with the case index, so all 42 pairs occur.
+    """
+    out: list[Case] = []
+    protocols = list(FRESH_PROTOCOLS)
+    i = 0
+    for plant in FRESH_PLANTS:
+        for effect, forms in FRESH_FORMS.items():
+            for form in forms:
+                for _ in range(NONE_PER_PLANT if effect == "none" else 1):
+                    protocol = protocols[i % len(protocols)]
+                    rate = FRESH_RATES_HZ[i % len(FRESH_RATES_HZ)]
+                    out.append(Case(plant, effect, form, protocol, rate, SEED_BASE + i, duration_s))
+                    i += 1
+    return out
+
+
+def _rms(x: Array) -> float:
+    return float(np.sqrt(np.mean(x * x)))
+
+
+def simulate(case: Case) -> dict[str, Any]:
+    """Noise-free outputs with and without the effect, the input, the columns and the truth."""
+    if case.plant not in FRESH_CORES:
+        raise KeyError(f"unknown fresh plant {case.plant!r}; known: {', '.join(FRESH_CORES)}")
+    rng = np.random.default_rng(case.seed)
+    dt = 1.0 / case.rate_hz
+    peak = float(rng.uniform(2.5, 6.0))
+    u = vented_full_cycle(case.protocol, case.duration_s, dt, peak, rng)
+    t = np.arange(u.size, dtype=np.float64) * dt
+    core = FRESH_CORES[case.plant]
+    params = draw_fresh_params(case.plant, rng, peak)
+    load, temperature, load_pattern, temp_pattern = columns(t, case.effect, rng)
+    q = draw_effect_params(case.effect, case.form, rng)
+    noise = NOISE_MM[case.plant]
+    off = render(core, params, u, dt, "none", q, load, temperature, 0.0)
+    span = float(np.ptp(off))
+    on, size, rescale = off, 0.0, 1.0
+    if case.effect != "none":
+        lo, hi = EFFECT_MIN_OVER_NOISE * noise, EFFECT_MAX_OVER_SPAN * span
+        key = INTENSITY_KEY[case.form]
+        for _ in range(8):
+            on = render(core, params, u, dt, case.form, q, load, temperature, span)
+            size = _rms(on - off)
+            if lo <= size <= hi:
+                break
+            step = 1.25 * lo / max(size, 1e-12) if size < lo else 0.85 * hi / size
+            step = float(np.clip(step, 1.0 / MAX_RESCALE / rescale, MAX_RESCALE / rescale))
+            if abs(step - 1.0) < 1e-9:
+                break  # at the limit of the rescale: reported as it is, the tests catch it
+            q[key] *= step
+            rescale *= step
+    truth: dict[str, Any] = {
+        "effect": case.effect,
+        "form": case.form,
+        "parameters": dict(q),
+        "plant_parameters": dict(params),
+        "effect_size": size,
+        "effect_size_over_noise": size / noise,
+        "effect_size_over_span": size / span,
+        "intensity_rescale": rescale,
+        "noise": noise,
+        "span": span,
+        "load_pattern": load_pattern,
+        "temperature_pattern": temp_pattern,
+    }
+    return {"t": t, "u": u, "on": on, "off": off, "load": load, "temperature": temperature, "truth": truth}
+
+
+def fresh_measurement(case: Case) -> tuple[Measurement, dict[str, Any]]:
+    """The recording of ``case``: noisy output [mm], load [kg] and temperature [degC] columns
+    (sensor noise and resolution), and the truth. Deterministic by ``case.seed``."""
+    sim = simulate(case)
+    rng = np.random.default_rng(case.seed + 10_000)  # measurement noise, independent of the plant draws
+    noise = sim["truth"]["noise"]
+    y = sim["on"] + rng.normal(0.0, noise, sim["on"].size)
+    extras = {
+        "load": np.round(sim["load"] + rng.normal(0.0, 0.01, y.size), 3),
+        "temperature": np.round(sim["temperature"] + rng.normal(0.0, 0.05, y.size), 1),
+    }
+    return Measurement(sim["t"], sim["u"], y, extras, source=case.name), sim["truth"]
