@@ -15,7 +15,7 @@ All of them share the quasi-static McKibben balance of :func:`mckibben_contracti
 * :func:`kp_sum`: Krasnosel'skii-Pokrovskii relays with ramps, a skewed two-lobe density on the
   Preisach plane, driving the McKibben balance as an effective pressure (rate-independent).
 * :func:`maxwell_slip_mass`: McKibben force on a moving mass held by Maxwell-slip elements, a
-  load spring and viscous damping: second-order mechanics with a light resonance (12-25 Hz).
+  load spring and viscous damping: second-order mechanics with a light resonance (~10-20 Hz).
 * :func:`pneumatic_chamber`: ``u`` is the valve command; the chamber pressure fills and vents
   through a nonlinear, direction-dependent law; contraction follows the McKibben balance with a
   Coulomb friction band in force space (a force-space play).
@@ -218,8 +218,8 @@ def draw_fresh_params(core: str, rng: np.random.Generator, peak: float) -> dict[
             "preload": rng.uniform(0.02, 0.06),
             "f0_n": rng.uniform(500.0, 900.0),
             "k": rng.uniform(0.4, 1.0),
-            "alpha": rng.uniform(5.0, 9.0),
-            "gamma": rng.uniform(0.3, 0.6),
+            "alpha": rng.uniform(2.5, 5.0),
+            "gamma": rng.uniform(0.5, 0.7),
         }
     if core == "kp_sum":
         return {
@@ -245,7 +245,7 @@ def draw_fresh_params(core: str, rng: np.random.Generator, peak: float) -> dict[
             "mass_kg": rng.uniform(1.0, 3.0),
             "k_slip": rng.uniform(20.0, 40.0),  # N/mm, all elements stuck
             "f_slip": rng.uniform(30.0, 60.0),  # N, total break-away
-            "c": rng.uniform(0.15, 0.4),  # N s/mm
+            "c": rng.uniform(0.05, 0.15),  # N s/mm: damping ratio ~0.1-0.3
         }
     if core == "pneumatic_chamber":
         return {

@@ -67,11 +67,13 @@ def load_plates(t: Array, rng: np.random.Generator) -> Array:
 
 
 def load_bucket(t: Array, rng: np.random.Generator) -> Array:
-    """A bucket filled and emptied slowly: piecewise-linear 0.5-6 kg, segments of 8-30 s."""
-    knots_t, knots_l = [0.0], [float(rng.uniform(0.5, 2.0))]
+    """A bucket filled and emptied slowly: linear between 0.5-2.5 kg and 3.5-6 kg, 8-30 s each way."""
+    high = bool(rng.integers(0, 2))
+    knots_t, knots_l = [0.0], [float(rng.uniform(3.5, 6.0) if high else rng.uniform(0.5, 2.5))]
     while knots_t[-1] < t[-1]:
+        high = not high
         knots_t.append(knots_t[-1] + float(rng.uniform(8.0, 30.0)))
-        knots_l.append(float(rng.uniform(0.5, 6.0)))
+        knots_l.append(float(rng.uniform(3.5, 6.0) if high else rng.uniform(0.5, 2.5)))
     return np.interp(t, knots_t, knots_l)
 
 
@@ -87,11 +89,11 @@ def temp_heat_gun(t: Array, rng: np.random.Generator) -> Array:
 
 
 def temp_room_hvac(t: Array, rng: np.random.Generator) -> Array:
-    """A room whose air conditioning cycles (period 40-120 s, 0.6-2 K) plus a slow random wander."""
+    """A room whose air conditioning cycles (period 30-90 s, 1-3 K) plus a slow random wander."""
     dt = float(t[1] - t[0])
-    cycle = np.tanh(3.0 * np.sin(2 * np.pi * t / rng.uniform(40.0, 120.0) + rng.uniform(0, 2 * np.pi)))
+    cycle = np.tanh(3.0 * np.sin(2 * np.pi * t / rng.uniform(30.0, 90.0) + rng.uniform(0, 2 * np.pi)))
     wander = lowpass(np.cumsum(rng.normal(0.0, 1.0, t.size)) * np.sqrt(dt), dt, 10.0)
-    return rng.uniform(20.0, 25.0) + rng.uniform(0.3, 1.0) * cycle + 0.3 * wander
+    return rng.uniform(20.0, 25.0) + rng.uniform(0.5, 1.5) * cycle + 0.3 * wander
 
 
 LOAD_PATTERNS = {"plates": load_plates, "bucket": load_bucket}
@@ -120,7 +122,7 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
     if form == "viscoelastic":  # a spring-dashpot branch in parallel: share of span per peak
         return {"branch_share": rng.uniform(0.15, 0.35), "tau_s": rng.uniform(0.3, 1.0)}
     if form == "power_law":  # creep compliance ~ t^exponent over 0.5-500 s, driven by pressure
-        return {"creep_share": rng.uniform(0.04, 0.1), "exponent": rng.uniform(0.2, 0.5)}
+        return {"creep_share": rng.uniform(0.08, 0.16), "exponent": rng.uniform(0.2, 0.5)}
     if form == "above_pressure":
         return {
             "creep_share": rng.uniform(0.06, 0.12),

@@ -106,10 +106,9 @@ def simulate(case: Case) -> dict[str, Any]:
     return {"t": t, "u": u, "on": on, "off": off, "load": load, "temperature": temperature, "truth": truth}
 
 
-def fresh_measurement(case: Case) -> tuple[Measurement, dict[str, Any]]:
-    """The recording of ``case``: noisy output [mm], load [kg] and temperature [degC] columns
-    (sensor noise and resolution), and the truth. Deterministic by ``case.seed``."""
-    sim = simulate(case)
+def measurement_from(case: Case, sim: dict[str, Any]) -> tuple[Measurement, dict[str, Any]]:
+    """The recording of ``case`` from its :func:`simulate` result: noisy output [mm], load [kg]
+    and temperature [degC] columns (sensor noise and resolution), and the truth."""
     rng = np.random.default_rng(case.seed + 10_000)  # measurement noise, independent of the plant draws
     noise = sim["truth"]["noise"]
     y = sim["on"] + rng.normal(0.0, noise, sim["on"].size)
@@ -117,4 +116,10 @@ def fresh_measurement(case: Case) -> tuple[Measurement, dict[str, Any]]:
         "load": np.round(sim["load"] + rng.normal(0.0, 0.01, y.size), 3),
         "temperature": np.round(sim["temperature"] + rng.normal(0.0, 0.05, y.size), 1),
     }
-    return Measurement(sim["t"], sim["u"], y, extras, source=case.name), sim["truth"]
+    return Measurement(sim["t"], sim["u"], y, extras, source=case.name), dict(sim["truth"])
+
+
+def fresh_measurement(case: Case) -> tuple[Measurement, dict[str, Any]]:
+    """The recording of ``case`` and its truth (effect, form, parameters, effect size [mm], effect
+    size over noise and over span, the column patterns). Deterministic by ``case.seed``."""
+    return measurement_from(case, simulate(case))

@@ -1,0 +1,166 @@
+"""Properties of the fresh held-out plant family (never the diagnosis's numbers).
+
+Short records (30 s) keep the default run to a few CPU seconds. The family is checked for what
+it promises: coverage, determinism, finite output, effect-free records with no effect, every
+effect visible (>= 4x noise) yet modest (<= 15 % of span) and pointing the physical way, columns
+that always move; and each core for the physics of a muscle (monotone ascending branches,
+closed periodic loops, real hysteresis, rate independence where claimed).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import numpy as np
+import pytest
+
+from tests.plants import family
+from tests.plants.fresh_cores import (
+    FRESH_CORES,
+    RATE_INDEPENDENT,
+    Hooks,
+    draw_fresh_params,
+    mckibben_contraction,
+)
+from tests.plants.fresh_effects import FRESH_FORMS
+from tests.plants.fresh_family import (
+    FRESH_PLANTS,
+    NONE_PER_PLANT,
+    fresh_cases,
+    fresh_measurement,
+    measurement_from,
+    simulate,
+)
+from tests.plants.fresh_protocols import FRESH_PROTOCOLS, vented_full_cycle
+from tests.plants.protocols import PROTOCOLS
+
+DURATION_S = 30.0
+CASES = fresh_cases(DURATION_S)
+
+
+def test_cases_cover_every_form_on_every_new_core_with_new_protocols_and_rates() -> None:
+    assert not set(FRESH_PLANTS) & set(family.TUNING_PLANTS + family.HELD_OUT_PLANTS)
+    assert len(FRESH_PLANTS) >= 3
+    per_plant = Counter((c.plant, c.effect, c.form) for c in CASES)
+    for plant in FRESH_PLANTS:
+        for effect, forms in FRESH_FORMS.items():
+            for form in forms:
+                assert per_plant[(plant, effect, form)] == (NONE_PER_PLANT if effect == "none" else 1)
+    for effect, forms in FRESH_FORMS.items():
+        assert effect == "none" or len(forms) >= 2
+    rates = {c.rate_hz for c in CASES}
+    assert rates - set(family.RATES_HZ) and all(50.0 <= r <= 500.0 for r in rates)
+    used = {c.protocol for c in CASES}
+    assert used == set(FRESH_PROTOCOLS) and used - set(PROTOCOLS)
+    assert len({c.seed for c in CASES}) == len(CASES)
+
+
+@pytest.mark.parametrize("case", CASES, ids=lambda c: c.name)
+def test_case_builds_with_a_visible_modest_effect_and_moving_columns(case: family.Case) -> None:
+    sim = simulate(case)
+    m, truth = measurement_from(case, sim)
+    n = int(round(DURATION_S * case.rate_hz))
+    assert len(m) == n and m.u.size == m.y.size == n and np.all(np.isfinite(m.y))
+    assert np.allclose(np.diff(m.t), 1.0 / case.rate_hz)
+    assert m.source == case.name and truth["effect"] == case.effect and truth["form"] == case.form
+    assert 10.0 <= truth["span"] <= 50.0  # mm-like stroke
+    assert np.ptp(m.extras["load"]) >= 1.0 and np.ptp(m.extras["temperature"]) >= 0.5
+    vented = int(round(2.0 * case.rate_hz))
+    assert np.all(m.u[:vented] == 0.0) and m.u.max() == pytest.approx(sim["u"].max())
+    size = float(np.sqrt(np.mean((sim["on"] - sim["off"]) ** 2)))
+    assert size == pytest.approx(truth["effect_size"])
+    residual = m.y - sim["on"]
+    assert np.std(residual) == pytest.approx(truth["noise"], rel=0.1)
+    if case.effect == "none":
+        assert size == 0.0 and np.array_equal(sim["on"], sim["off"])
+        return
+    assert 4.0 * truth["noise"] <= size <= 0.15 * truth["span"]
+    shift = float(np.mean(sim["on"] - sim["off"]))
+    if case.effect == "load_dependence":
+        assert shift < 0.0  # a heavier load never helps the muscle contract
+    if case.effect == "creep" or case.form == "stiffness":
+        assert shift > 0.0  # creep keeps contracting; a warmer, softer bladder contracts further
+
+
+def test_effect_cases_lag_when_delayed() -> None:
+    for case in (c for c in CASES if c.effect == "transport_delay"):
+        sim = simulate(case)
+        on, off = sim["on"], sim["off"]
+        lags = np.arange(0, int(0.5 * case.rate_hz))
+        misfit = [float(np.mean((on[k:] - off[: off.size - k]) ** 2)) for k in lags]
+        assert lags[int(np.argmin(misfit))] > 0, case.name  # the effect-free output, shifted later, fits best
+
+
+def test_measurement_is_deterministic_by_seed() -> None:
+    for case in CASES[::13]:
+        a, ta = fresh_measurement(case)
+        b, tb = fresh_measurement(case)
+        assert np.array_equal(a.y, b.y) and np.array_equal(a.extras["load"], b.extras["load"])
+        assert ta == tb
+    other = family.Case(**{**CASES[0].__dict__, "seed": CASES[0].seed + 1})
+    assert not np.array_equal(fresh_measurement(CASES[0])[0].y, fresh_measurement(other)[0].y)
+
+
+def _triangles(peak: float, period_s: float, cycles: int, dt_s: float) -> np.ndarray:
+    t = np.arange(int(round(cycles * period_s / dt_s))) * dt_s
+    return peak * (0.1 + 0.8 * (1.0 - np.abs(2.0 * ((t / period_s) % 1.0) - 1.0)))
+
+
+def _branches(u: np.ndarray, y: np.ndarray, grid: np.ndarray, per_cycle: int) -> tuple[np.ndarray, np.ndarray]:
+    """The last cycle's ascending and descending branch sampled on ``grid``."""
+    cu, cy = u[-per_cycle:], y[-per_cycle:]
+    half = per_cycle // 2
+    return np.interp(grid, cu[:half], cy[:half]), np.interp(grid, cu[half:][::-1], cy[half:][::-1])
+
+
+@pytest.mark.parametrize("core", list(FRESH_CORES))
+def test_core_is_a_closed_monotone_hysteresis_loop(core: str) -> None:
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        peak = float(rng.uniform(2.5, 6.0))
+        params = draw_fresh_params(core, rng, peak)
+        dt, period = 0.02, 16.0
+        u = _triangles(peak, period, 4, dt)
+        y = FRESH_CORES[core](u, dt, params, Hooks.neutral(u.size))
+        span = float(np.ptp(y))
+        per = int(round(period / dt))
+        assert 10.0 <= span <= 50.0
+        assert np.max(np.abs(y[-per:] - y[-2 * per : -per])) < 0.01 * span  # the loop closes
+        rising = np.diff(u[per:]) > 0  # after the first cycle (the start-up settles in it)
+        assert np.min(np.diff(y[per:])[rising]) > -0.005 * span  # ascending branches rise (dynamics: a hair)
+        assert np.max(np.diff(y[per:])[~rising]) < 0.005 * span
+        up, down = _branches(u, y, np.linspace(0.3, 0.7, 9) * peak, per)
+        assert np.all(down - up > 0.02 * span)  # a real loop, descending above ascending
+
+
+@pytest.mark.parametrize("core", RATE_INDEPENDENT)
+def test_rate_independent_cores_draw_the_same_loop_at_two_slow_speeds(core: str) -> None:
+    rng = np.random.default_rng(5)
+    peak = 4.0
+    params = draw_fresh_params(core, rng, peak)
+    grid = np.linspace(0.2, 0.8, 13) * peak
+    loops = []
+    for period, dt in ((12.0, 0.01), (40.0, 0.02)):
+        u = _triangles(peak, period, 3, dt)
+        y = FRESH_CORES[core](u, dt, params, Hooks.neutral(u.size))
+        loops.append(np.concatenate(_branches(u, y, grid, int(round(period / dt)))))
+    assert np.max(np.abs(loops[0] - loops[1])) < 0.01 * np.ptp(loops[0])
+
+
+def test_mckibben_balance_holds_and_has_a_dead_zone_under_load() -> None:
+    p = np.linspace(0.0, 1.0, 101)
+    x = mckibben_contraction(p, 0.1, 0.7)
+    assert np.all(x[p <= 0.1] == 0.0) and np.all(np.diff(x[p > 0.1]) > 0)
+    live = p > 0.1
+    assert np.allclose(p[live] * (1 - x[live]) ** 2, 0.1 + 0.7 * x[live])
+    assert np.all(mckibben_contraction(p, 0.2, 0.7)[live] <= x[live])
+
+
+@pytest.mark.parametrize("protocol", list(FRESH_PROTOCOLS))
+def test_protocols_start_vented_and_stay_in_range(protocol: str) -> None:
+    dt, peak = 1.0 / 80.0, 4.0
+    u = vented_full_cycle(protocol, 60.0, dt, peak, np.random.default_rng(1))
+    assert u.size == int(round(60.0 / dt)) and np.all(np.isfinite(u))
+    assert np.all(u[: int(2.0 / dt)] == 0.0) and u[: int(12.0 / dt)].max() == pytest.approx(peak, rel=0.01)
+    assert u.min() >= 0.0 and u.max() <= peak
+    assert np.ptp(u[int(13.0 / dt) :]) > 0.3 * peak  # the protocol itself excites the loop
