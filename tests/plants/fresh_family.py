@@ -9,6 +9,11 @@ effect minus the same plant, protocol and seed with the effect switched off) lie
 ``[EFFECT_MIN_OVER_NOISE * noise, EFFECT_MAX_OVER_SPAN * span]``. The drawn intensity is kept when
 it lands there; otherwise it is scaled (at most 4x either way, recorded as
 ``intensity_rescale`` in the truth) until it does.
+
+Confounds a real rig has, kept on purpose in the effect-free records too: the chamber core's
+fill/vent dynamics (a level- and direction-dependent lag), the slip-mass core's light
+resonance, per-plant sensor noise (0.02-0.05 mm), temperature read at 0.1 K, and warming curves
+or load changes that do nothing. The table of every case: ``python -m tests.plants.fresh_family 100``.
 """
 
 from __future__ import annotations
@@ -123,3 +128,30 @@ def fresh_measurement(case: Case) -> tuple[Measurement, dict[str, Any]]:
     """The recording of ``case`` and its truth (effect, form, parameters, effect size [mm], effect
     size over noise and over span, the column patterns). Deterministic by ``case.seed``."""
     return measurement_from(case, simulate(case))
+
+
+def report_table(duration_s: float = 100.0) -> str:
+    """A Markdown table of every case: plant, effect:form, protocol, rate, effect size over noise
+    and over span, column patterns; and the CPU seconds it took to build them all."""
+    import time
+
+    start = time.process_time()
+    rows = [
+        "| plant | effect:form | protocol | rate [Hz] | effect/noise | effect/span | load/temperature |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for case in fresh_cases(duration_s):
+        truth = simulate(case)["truth"]
+        rows.append(
+            f"| {case.plant} | {case.effect}:{case.form} | {case.protocol} | {case.rate_hz:g} | "
+            f"{truth['effect_size_over_noise']:.1f} | {100 * truth['effect_size_over_span']:.1f} % | "
+            f"{truth['load_pattern']}/{truth['temperature_pattern']} |"
+        )
+    rows.append(f"\n{len(rows) - 2} cases of {duration_s:g} s built in {time.process_time() - start:.1f} CPU s")
+    return "\n".join(rows)
+
+
+if __name__ == "__main__":
+    import sys
+
+    print(report_table(float(sys.argv[1]) if len(sys.argv) > 1 else 100.0))
