@@ -89,11 +89,12 @@ def temp_heat_gun(t: Array, rng: np.random.Generator) -> Array:
 
 
 def temp_room_hvac(t: Array, rng: np.random.Generator) -> Array:
-    """A room whose air conditioning cycles (period 30-90 s, 1-3 K) plus a slow random wander."""
+    """A room whose air conditioning cycles (period 30-90 s, 1-3 K) plus a slow 0.5-2 K wander."""
     dt = float(t[1] - t[0])
     cycle = np.tanh(3.0 * np.sin(2 * np.pi * t / rng.uniform(30.0, 90.0) + rng.uniform(0, 2 * np.pi)))
     wander = lowpass(np.cumsum(rng.normal(0.0, 1.0, t.size)) * np.sqrt(dt), dt, 10.0)
-    return rng.uniform(20.0, 25.0) + rng.uniform(0.5, 1.5) * cycle + 0.3 * wander
+    wander = (wander - wander.mean()) / (np.ptp(wander) or 1.0)
+    return rng.uniform(20.0, 25.0) + rng.uniform(0.5, 1.5) * cycle + rng.uniform(0.5, 2.0) * wander
 
 
 LOAD_PATTERNS = {"plates": load_plates, "bucket": load_bucket}
