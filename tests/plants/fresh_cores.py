@@ -7,6 +7,8 @@ through which the effects of :mod:`tests.plants.fresh_effects` act *inside* the 
 * ``width``: factor on the hysteresis width (friction level, relay spread, Duhem rate).
 * ``load_kg``: hanging mass [kg] acting in the muscle's force balance (0: only the fixed preload).
 * ``stiffness``: factor on the elastic stiffness that opposes contraction (load spring, bladder).
+* ``relax_s``: time constant [s] of a viscous element on the hysteresis state (0: the state
+  jumps at once): Duhem deviation, relay states, slip anchors (Bingham), friction band.
 
 All of them share the quasi-static McKibben balance of :func:`mckibben_contraction`
 (``F = p F0 (1 - x)^2`` against ``W + K x``), which has a physical dead zone under load.
@@ -40,10 +42,16 @@ class Hooks:
     width: Array
     load_kg: Array
     stiffness: Array
+    relax_s: float = 0.0
 
     @staticmethod
     def neutral(n: int) -> Hooks:
         return Hooks(np.ones(n), np.zeros(n), np.ones(n))
+
+
+def _relax_share(dt_s: float, relax_s: float) -> float:
+    """Share of the way a viscous state moves to its target in ``dt_s`` (1: no viscosity)."""
+    return 1.0 if relax_s <= 0.0 else float(1.0 - np.exp(-dt_s / relax_s))
 
 
 def mckibben_contraction(p: Array | float, load: Array | float, stiffness: Array | float) -> Array:
@@ -66,6 +74,7 @@ def coleman_hodgdon(u: Array, dt_s: float, p: dict[str, float], hooks: Hooks) ->
     ``f`` is the McKibben curve [mm] (``stroke_mm`` times :func:`mckibben_contraction`),
     ``g = gamma f'`` with ``gamma < 1``: ascending branches run below ``f``, descending above,
     loop width ~ ``2 (1 - gamma) f' / alpha``; ``alpha`` [1/unit of v] is divided by ``width``.
+    With ``relax_s`` the hysteretic deviation ``z - f`` reaches the output through a lag.
     """
     v = u / p["peak"]
     load = p["preload"] + hooks.load_kg * G_MS2 / p["f0_n"]
@@ -78,13 +87,16 @@ def coleman_hodgdon(u: Array, dt_s: float, p: dict[str, float], hooks: Hooks) ->
     out = np.empty_like(u)
     z = float(f[0])
     prev = float(v[0])
+    share = _relax_share(dt_s, hooks.relax_s)
+    dev = 0.0
     sub = 4  # sub-steps keep alpha |dv| < 1 (no overshoot past f)
     for i, (vi, fi, gi, ai) in enumerate(zip(v.tolist(), f.tolist(), g.tolist(), alpha.tolist())):
         d = (vi - prev) / sub
         for _ in range(sub):
             z += ai * abs(d) * (fi - z) + gi * d
         prev = vi
-        out[i] = z
+        dev += share * ((z - fi) - dev)
+        out[i] = fi + dev
     return out
 
 
@@ -101,18 +113,20 @@ def _kp_grid(p: dict[str, float]) -> tuple[Array, Array, Array]:
 def kp_sum(u: Array, dt_s: float, p: dict[str, float], hooks: Hooks) -> Array:
     """Effective pressure ``h = (1 - s) v + s * sum w_i r_i(v)`` of KP relays with ramps, then
     the McKibben balance; rate-independent. Relay ``i`` (ramp ``a``) follows
-    ``r = min(ramp(v - beta), max(ramp(v - alpha + a), r))``, ``alpha - beta = 2 half width``."""
+    ``r = min(ramp(v - beta), max(ramp(v - alpha + a), r))``, ``alpha - beta = 2 half width``;
+    with ``relax_s`` each relay moves to that target through a first-order lag."""
     v = u / p["peak"]
     mids, halves, w = _kp_grid(p)
     ramp = 0.015
     share = p["share"]
+    move = _relax_share(dt_s, hooks.relax_s)
     r = np.zeros_like(mids)  # vented: every relay off
     h = np.empty_like(u)
     for i, (vi, wi) in enumerate(zip(v.tolist(), hooks.width.tolist())):
         half = np.maximum(halves * wi, ramp)
         up = np.clip((vi - (mids + half) + ramp) / ramp, 0.0, 1.0)
         down = np.clip((vi - (mids - half)) / ramp, 0.0, 1.0)
-        r = np.minimum(down, np.maximum(up, r))
+        r += move * (np.minimum(down, np.maximum(up, r)) - r)
         h[i] = (1.0 - share) * vi + share * float(w @ r)
     load = p["preload"] + hooks.load_kg * G_MS2 / p["f0_n"]
     return p["stroke_mm"] * mckibben_contraction(h, load, p["k"] * hooks.stiffness)
@@ -121,13 +135,15 @@ def kp_sum(u: Array, dt_s: float, p: dict[str, float], hooks: Hooks) -> Array:
 def maxwell_slip_mass(u: Array, dt_s: float, p: dict[str, float], hooks: Hooks) -> Array:
     """``m y'' = F0 v (1 - y/ym)^2 - sum F_i - k_L y - W - c y'`` [N, mm, kg], semi-implicit
     Euler at <= 0.5 ms. Element ``i`` (stiffness ``k_i``, break-away ``f_i width``) sticks
-    while ``|k_i (y - s_i)| < f_i`` and slides otherwise; the hanging mass adds to ``m``."""
+    while ``|k_i (y - s_i)| < f_i`` and slides otherwise (with ``relax_s``: its anchor creeps to
+    the limit through a lag, a Bingham element); the hanging mass adds to ``m``."""
     f0, ym = p["f0_n"], p["ym_mm"]
     n_el = 4
     ks = [p["k_slip"] * s for s in (0.4, 0.3, 0.2, 0.1)]
     fs = [p["f_slip"] * s for s in (0.1, 0.2, 0.3, 0.4)]
     sub = max(1, int(np.ceil(dt_s / 0.0005)))
     h = dt_s / sub
+    move = _relax_share(h, hooks.relax_s)
     y, vel = 0.0, 0.0
     anchors = [0.0] * n_el
     out = np.empty_like(u)
@@ -147,11 +163,11 @@ def maxwell_slip_mass(u: Array, dt_s: float, p: dict[str, float], hooks: Hooks) 
                 limit = fs[j] * wi
                 fj = ks[j] * (y - anchors[j])
                 if fj > limit:
-                    anchors[j] = y - limit / ks[j]
-                    fj = limit
+                    anchors[j] += move * (y - limit / ks[j] - anchors[j])
+                    fj = ks[j] * (y - anchors[j])
                 elif fj < -limit:
-                    anchors[j] = y + limit / ks[j]
-                    fj = -limit
+                    anchors[j] += move * (y + limit / ks[j] - anchors[j])
+                    fj = ks[j] * (y - anchors[j])
                 force -= fj
             vel += h * force / mass * 1000.0  # N/kg = m/s^2 -> mm/s^2
             y = max(0.0, y + h * vel)  # the muscle cannot lengthen past its rest length
@@ -168,7 +184,8 @@ def pneumatic_chamber(u: Array, dt_s: float, p: dict[str, float], hooks: Hooks) 
     ``dP/dt = sign(e) |e|^0.6 rate(P)`` with ``e = u - P`` (sonic-like flow), filling at
     ``rate_fill / (1 + P/peak)`` (volume grows), venting at ``rate_vent (0.3 + P/peak)`` (little
     head to atmosphere when low); never overshoots. Contraction: Coulomb band ``+-fc width`` in
-    force space, ``x = clip(x, x(P, W + fc), x(P, W - fc))`` with the McKibben balance.
+    force space, ``x = clip(x, x(P, W + fc), x(P, W - fc))`` with the McKibben balance (with
+    ``relax_s``: ``x`` moves to that clip through a lag).
     """
     peak = p["peak"]
     sub = max(1, int(np.ceil(dt_s / 0.001)))
@@ -193,8 +210,9 @@ def pneumatic_chamber(u: Array, dt_s: float, p: dict[str, float], hooks: Hooks) 
     lo = mckibben_contraction(v, load + fc, k)
     x = np.empty_like(u)
     xi = float(lo[0])
+    move = _relax_share(dt_s, hooks.relax_s)
     for i, (a, b) in enumerate(zip(lo.tolist(), hi.tolist())):
-        xi = min(b, max(a, xi))
+        xi += move * (min(b, max(a, xi)) - xi)
         x[i] = xi
     return p["stroke_mm"] * x
 

@@ -3,9 +3,9 @@
 Effects act where a real rig has them: in the input line (a dead time that grows as the
 pressure falls; a dead zone the hanging mass opens), inside a core through
 :class:`~tests.plants.fresh_cores.Hooks` (a relay/friction threshold growing with the log of the
-speed; the load in the muscle's force balance with a stiffening load spring; the bladder's
-stiffness softening with temperature) or on the output (a viscoelastic parallel branch;
-power-law creep driven by the pressure; creep that only acts above a pressure level; sensor
+speed; a viscous element on the hysteresis state; the load in the muscle's force balance with
+a stiffening load spring; the bladder's stiffness softening with temperature) or on the output
+(power-law creep driven by the pressure; creep that only acts above a pressure level; sensor
 latency; temperature through a nonlinear offset plus a gain). Load [kg] and temperature [degC]
 columns always move; when they are not the effect they are decoys, and the warming curve is
 sometimes a decoy too.
@@ -22,7 +22,7 @@ from tests.plants.fresh_cores import Core, Hooks
 Array = NDArray[np.float64]
 FRESH_FORMS: dict[str, tuple[str, ...]] = {
     "none": ("none",),
-    "rate_dependence": ("log_threshold", "viscoelastic"),
+    "rate_dependence": ("log_threshold", "viscous_state"),
     "creep": ("power_law", "above_pressure"),
     "transport_delay": ("pressure_dependent", "sensor_latency"),
     "load_dependence": ("force_balance", "dead_zone"),
@@ -30,7 +30,7 @@ FRESH_FORMS: dict[str, tuple[str, ...]] = {
 }
 INTENSITY_KEY: dict[str, str] = {  # the parameter that scales each form's size
     "log_threshold": "widening",
-    "viscoelastic": "branch_share",
+    "viscous_state": "relax_s",
     "power_law": "creep_share",
     "above_pressure": "creep_share",
     "pressure_dependent": "dead_time_scale",
@@ -120,8 +120,8 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
     """The drawn constants of ``effect`` in ``form`` (units in the key names or below)."""
     if form == "log_threshold":  # width = 1 + widening * log(1 + speed / v0), speed in peak/s
         return {"widening": rng.uniform(0.15, 0.35), "v0": rng.uniform(0.02, 0.06), "speed_tau_s": 0.3}
-    if form == "viscoelastic":  # a spring-dashpot branch in parallel: share of span per peak
-        return {"branch_share": rng.uniform(0.15, 0.35), "tau_s": rng.uniform(0.3, 1.0)}
+    if form == "viscous_state":  # time constant of the hysteresis state's viscous element
+        return {"relax_s": rng.uniform(0.08, 0.4)}
     if form == "power_law":  # creep compliance ~ t^exponent over 0.5-500 s, driven by pressure
         return {"creep_share": rng.uniform(0.08, 0.16), "exponent": rng.uniform(0.2, 0.5)}
     if form == "above_pressure":
@@ -207,10 +207,10 @@ def render(
         hooks = Hooks(hooks.width, q["load_scale"] * load, stiff)
     elif form == "stiffness":
         hooks = Hooks(hooks.width, hooks.load_kg, np.exp(-q["softening_per_k"] * d_temp))
+    elif form == "viscous_state":
+        hooks = Hooks(hooks.width, hooks.load_kg, hooks.stiffness, q["relax_s"])
     x = core(drive, dt_s, params, hooks)
-    if form == "viscoelastic":
-        x = x + q["branch_share"] * span_mm * (u - lowpass(u, dt_s, q["tau_s"])) / peak
-    elif form == "power_law":
+    if form == "power_law":
         taus = np.geomspace(0.5, 500.0, 10)
         weights = taus ** q["exponent"]
         weights /= weights.sum()
