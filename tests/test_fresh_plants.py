@@ -186,3 +186,17 @@ def test_viscous_hysteresis_state_matters_fast_and_fades_slow(core: str) -> None
         per = int(round(period / dt))
         gaps.append(float(np.sqrt(np.mean((viscous[-per:] - plain[-per:]) ** 2))))
     assert gaps[0] > 2.0 * gaps[1] and gaps[0] > 0.2  # rate dependence: mm at 0.5 Hz, shrinking when slow
+
+
+@pytest.mark.slow
+def test_full_length_cases_keep_their_effects_visible_and_modest() -> None:
+    """The lead's records (150 s, the default): every effect still in its band, every column moving."""
+    for case in fresh_cases():
+        sim = simulate(case)
+        truth = sim["truth"]
+        assert 10.0 <= truth["span"] <= 50.0, case.name
+        assert np.ptp(sim["load"]) >= 1.0 and np.ptp(sim["temperature"]) >= 0.5, case.name
+        if case.effect == "none":
+            assert truth["effect_size"] == 0.0
+        else:
+            assert 4.0 * truth["noise"] <= truth["effect_size"] <= 0.15 * truth["span"], case.name
