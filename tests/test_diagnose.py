@@ -42,7 +42,11 @@ def test_a_consistent_gain_is_named_with_its_margins():
 
 def test_gains_the_folds_do_not_agree_on_are_not_evidence():
     v = verdict(creep=[0.60, -0.05, 0.02, 0.03])  # one lucky fold: mean 15 %, spread 30 %
-    assert v.cause == "none" and "fold spread" in v.reason
+    assert v.cause == "none" and "do not agree" in v.reason
+    v = verdict(creep=[0.30, 0.28, -0.15, 0.31])  # one part of the record contradicts it
+    assert v.cause == "none" and "contradicts" in v.reason
+    v = verdict(creep=[0.05, 0.06, 0.07, 0.05])  # consistent but below the calibrated floor
+    assert v.cause == "none" and "below" in v.reason
     assert v.confidence["over_threshold"] < 0
 
 
@@ -54,7 +58,7 @@ def test_a_fit_that_blows_up_on_a_fold_is_a_failed_fit_not_evidence_against():
 
 
 def test_a_gain_at_the_noise_floor_is_not_evidence():
-    gains = [0.06, 0.07, 0.06, 0.065]  # +6 % of a baseline already at 1.0, with noise 0.5
+    gains = [0.10, 0.11, 0.10, 0.105]  # +10 % of a baseline already at 1.0, with noise 0.5
     assert verdict(noise=0.0, rate_dependence=gains).cause == "rate_dependence"
     v = verdict(noise=0.5, rate_dependence=gains)
     assert v.cause == "none" and "noise floor" in v.reason
@@ -66,6 +70,16 @@ def test_an_observed_cause_must_beat_a_slow_drift_of_the_same_flexibility():
     assert v.cause == "slow_drift"
     v = verdict(temperature_drift=[0.35, 0.36, 0.30, 0.33], slow_drift=drift)
     assert v.cause == "temperature_drift" and "slow drift" in v.decided_by
+
+
+def test_a_temperature_that_follows_time_is_named_with_the_confound():
+    drift = [0.14, 0.16, 0.15, 0.13]
+    scores = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}
+    scores["slow_drift"] = scored("slow_drift", drift)
+    scores["temperature_drift"] = scored("temperature_drift", [0.15, 0.16, 0.15, 0.14])
+    assert choose(scores, 0.0, {"temperature": 0.3}).cause == "slow_drift"
+    v = choose(scores, 0.0, {"temperature": 0.97})
+    assert v.cause == "temperature_drift" and "confounded" in v.decided_by and "r = +0.97" in v.reason
 
 
 def test_observed_causes_do_not_win_by_rank_against_a_stronger_dynamic_cause():

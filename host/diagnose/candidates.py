@@ -1,10 +1,14 @@
-"""The candidate extensions of the diagnosis: one physical term each, fitted on one fold's training rows.
+"""The candidate extensions of the diagnosis: one physical term each, identified on the whole record.
 
-* ``rate_dependence``, two forms, the better on training rows wins: velocity-squared friction
+Each candidate is a :class:`Design`: its hysteresis (and any grid setting) fitted on every row,
+jointly with its term; a fold then refits only the gains and the term's coefficients.
+
+* ``rate_dependence``, two forms, the better on the whole record wins: velocity-squared friction
   between the rate-independent value and the output (the output trails by ``alpha v|v|``), or a
   rate-dependent hysteresis weight (the loop widens and the stroke changes with the input speed:
   ``branch * r`` and ``x * r``, ``r`` the input speed over its 95th percentile);
-* ``creep``: a creep operator, first-order relaxation of the hysteresis output (2-80 s);
+* ``creep``: a creep spectrum, first-order relaxations of the hysteresis output at 1-64 s whose
+  shares all have one sign (:func:`creep`);
 * ``transport_delay``: a dead time before the hysteresis (at least 3 samples);
 * ``load_dependence`` / ``temperature_drift``: the measured column shifts and bends the curve
   and widens or narrows the loop (``v, v x, v x^2, v branch``);
@@ -16,16 +20,18 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
 
-from host.diagnose.features import velocity_squared_lag
-from host.diagnose.hammerstein import FittedModel, fit_arx, fit_hammerstein, rmse
+from host.diagnose.features import slow_part, velocity_squared_lag
+from host.diagnose.hammerstein import FittedModel, fit_gains, fit_hammerstein, rmse
 
 CAUSES = ("rate_dependence", "creep", "transport_delay", "load_dependence", "temperature_drift", "slow_drift")
 OBSERVED_CAUSES = ("load_dependence", "temperature_drift")
-CREEP_TAUS_S = (2.0, 5.0, 10.0, 20.0, 40.0, 80.0)
+CREEP_TAUS_S = (2.0, 5.0, 10.0, 20.0, 40.0, 80.0)  # cross-run diagnosis: one time constant
+CREEP_SPECTRUM_S = (1.0, 4.0, 16.0, 64.0)
 MIN_DELAY_SAMPLES = 3
 # dead times screened jointly with the shorter actuator lags (when a signature asks for it)
 JOINT_DELAYS_S = (0.05, 0.1, 0.16, 0.2, 0.3)
@@ -38,7 +44,7 @@ FULL_ITERATIONS = 3
 
 @dataclass
 class Context:
-    """Everything a candidate model may use: the record, its features, one fold's training rows."""
+    """Everything a candidate model may use: the record, its features and the baseline's fit."""
 
     t: NDArray[np.float64]
     u: NDArray[np.float64]
@@ -53,92 +59,177 @@ class Context:
     lag_s: float = 0.0  # the actuator lag of the baseline
     output_rate: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     joint_delay: bool = False  # screen a dead time jointly with the shorter actuator lags
+    ar: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))  # the baseline's poles
 
     @property
     def rows(self) -> NDArray[np.float32]:
         return self.lag_rows[self.lag_s]
 
 
-def _best_of(
-    ctx: Context, key: str, values: Sequence[float], fit_for: Callable[[float, int], FittedModel]
-) -> FittedModel:
-    """``fit_for(v, iterations)`` for each candidate ``v``: screened with one alternation each, the
-    lowest *training* RMSE wins and is fitted fully (the screening order of the grid values is
-    what matters; full alternation on every value would triple the cost)."""
-    best_value: float | None = None
-    best_error = np.inf
-    for value in values:
-        model = fit_for(value, SCREEN_ITERATIONS)
-        error = rmse(model.prediction[ctx.train], ctx.y[ctx.train])
-        if np.isfinite(error) and error < best_error:
-            best_value, best_error = value, error
-    chosen = values[0] if best_value is None else best_value  # all diverged: the first stands for the failed fit
-    model = fit_for(chosen, FULL_ITERATIONS)
-    model.extra[key] = float(chosen)
-    return model
+@dataclass
+class Design:
+    """A model whose hysteresis is identified on the whole record; what a fold refits is linear.
+
+    The Preisach cell masses (and any grid setting: creep time constant, dead time, friction
+    coefficient) are fitted once on every row, so a held-out block never asks the hysteresis for
+    a memory state its training blocks did not visit (with ~100-200 masses that error swamped
+    every effect: held-out baseline errors 4x the in-sample error on multisines). Per fold only
+    the gain, the offset and the term's few coefficients are refitted on the training rows (the
+    poles kept) and scored on the held-out rows: a term that fits one part of the record but not
+    another fails there. Baseline and extensions all get their masses from every row, so
+    neither is favoured.
+    """
+
+    name: str
+    x: NDArray[np.float64]  # hysteresis output over the whole record [units of y]
+    columns: NDArray[np.float64]  # the term's regressors in the ARX drive, (n, k)
+    labels: list[str]
+    ar: NDArray[np.float64]  # poles of the dynamics identified on the whole record (y_k = ar @ past y + drive)
+    velocity_alpha: float = 0.0  # > 0: velocity-squared friction element after the ARX [s^2 / unit]
+    extra: dict[str, float] = field(default_factory=dict)
+    # the measured column (or time) the term is a function of: held-out rows where it lies outside
+    # the training rows' range are not scored (see :meth:`scored`)
+    source: NDArray[np.float64] | None = None
+
+    def scored(self, train: NDArray[np.bool_], held: NDArray[np.bool_]) -> NDArray[np.bool_]:
+        """Held-out rows this design can be judged on: where its column is inside the range the
+        training rows saw. A blocked fold puts the first and last loads or temperatures of a
+        record in a block of their own; a term there extrapolates its curvature, and its error
+        says nothing about whether the column matters (the same rows are used for the baseline)."""
+        if self.source is None:
+            return held
+        lo, hi = float(self.source[train].min()), float(self.source[train].max())
+        return held & (self.source >= lo) & (self.source <= hi)
+
+    def fit(self, ctx: Context, train: NDArray[np.bool_]) -> FittedModel:
+        """Gain, offset and term coefficients on ``train`` rows (the poles kept), simulated over
+        the whole record. Re-choosing the dynamics' order per fold made folds disagree for
+        reasons that have nothing to do with the term."""
+        target = ctx.y
+        if self.velocity_alpha > 0:
+            v = ctx.output_rate
+            target = ctx.y + self.velocity_alpha * v * np.abs(v)
+        model = fit_gains(self.name, self.x, target, train, self.ar, self.columns, self.labels)
+        if self.velocity_alpha > 0:
+            model.prediction = velocity_squared_lag(model.prediction, ctx.dt, self.velocity_alpha)
+        model.extra.update(self.extra)
+        return model
 
 
-def centred(values: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np.float64]:
-    return values - values[train].mean()
+def _training_error(model: FittedModel, ctx: Context) -> float:
+    error = rmse(model.prediction, ctx.y)
+    return error if np.isfinite(error) else np.inf
 
 
-def _normalised(values: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np.float64]:
-    v = centred(values, train)
-    return v / (float(np.std(v[train])) or 1.0)
+def _best_of(values: Sequence[float], design_for: Callable[[float, int], Design], ctx: Context) -> Design:
+    """``design_for(v, iterations)`` for each grid value ``v``: screened with one alternation each,
+    the lowest whole-record RMSE wins and is fitted fully (full alternation on every value would
+    triple the cost; the screening order of the grid values is what matters)."""
+    every = np.ones(ctx.y.size, dtype=bool)
+    errors = [_training_error(design_for(v, SCREEN_ITERATIONS).fit(ctx, every), ctx) for v in values]
+    return design_for(values[int(np.argmin(errors))], FULL_ITERATIONS)
 
 
-def _friction_model(ctx: Context, share: float, iterations: int = FULL_ITERATIONS) -> FittedModel:
+def _normalised(values: NDArray[np.float64]) -> NDArray[np.float64]:
+    v = values - values.mean()
+    return v / (float(np.std(v)) or 1.0)
+
+
+def _empty(n: int) -> NDArray[np.float64]:
+    return np.zeros((n, 0))
+
+
+def baseline(ctx: Context, fitted: FittedModel) -> Design:
+    """Rate-independent hysteresis after the actuator lag (``ctx.x``), then the ``fitted`` baseline's dynamics."""
+    return Design("baseline", ctx.x, _empty(ctx.y.size), [], fitted.ar, extra={"actuator_lag_s": ctx.lag_s})
+
+
+def _hysteresis(
+    ctx: Context,
+    rows: NDArray[np.float32],
+    target: NDArray[np.float64],
+    iterations: int,
+    creep_tau_s: float | None = None,
+    columns: NDArray[np.float64] | None = None,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The hysteresis output and the poles of a model fitted on every row (jointly with ``columns``)."""
+    every = np.ones(ctx.y.size, dtype=bool)
+    model, x = fit_hammerstein("x", rows, target, every, ctx.dt, iterations, creep_tau_s=creep_tau_s, columns=columns)
+    return x, model.ar
+
+
+def _with_columns(ctx: Context, name: str, columns: NDArray[np.float64], labels: list[str], **extra: float) -> Design:
+    """A term of ``columns`` whose hysteresis is refitted jointly with it on every row."""
+    x, ar = _hysteresis(ctx, ctx.rows, ctx.y, FULL_ITERATIONS, columns=columns)
+    return Design(name, x, columns, labels, ar, extra=dict(extra))
+
+
+def _friction(ctx: Context, share: float, iterations: int) -> Design:
     """Velocity-squared friction: what is measured trails the rate-independent model's output by
-    ``alpha v|v|``, ``v`` the output's speed. Fitted by equation error (hysteresis + dynamics
-    fitted to ``y + alpha v|v|`` with ``v`` from the measured training output), simulated (output
-    error) through :func:`velocity_squared_lag`, which needs no measured output."""
+    ``alpha v|v|``, ``v`` the output's speed. The hysteresis is fitted by equation error (to
+    ``y + alpha v|v|`` with ``v`` from the measured output); the simulation passes the ARX output
+    through :func:`velocity_squared_lag`, which needs no measured output."""
     v = ctx.output_rate
-    speed95 = float(np.percentile(np.abs(v[ctx.train]), 95)) or 1.0
-    alpha = share * float(np.ptp(ctx.y[ctx.train])) / speed95**2
-    model, _ = fit_hammerstein(
-        "rate_dependence", ctx.rows, ctx.y + alpha * v * np.abs(v), ctx.train, ctx.dt, iterations=iterations
-    )
-    model.prediction = velocity_squared_lag(model.prediction, ctx.dt, alpha)
-    model.extra["velocity_squared_coefficient_s2_per_unit"] = alpha
-    model.extra["form"] = 0.0
-    return model
+    speed95 = float(np.percentile(np.abs(v), 95)) or 1.0
+    alpha = share * float(np.ptp(ctx.y)) / speed95**2
+    x, ar = _hysteresis(ctx, ctx.rows, ctx.y + alpha * v * np.abs(v), iterations)
+    extra = {"velocity_squared_coefficient_s2_per_unit": alpha, "deflection_share_at_speed95": share, "form": 0.0}
+    return Design("rate_dependence", x, _empty(ctx.y.size), [], ar, velocity_alpha=alpha, extra=extra)
 
 
-def _rate_weight_model(ctx: Context) -> FittedModel:
+def _rate_weight(ctx: Context) -> Design:
     """Rate-dependent hysteresis weight: the loop width (``branch``) and the stroke (``x``) change
     with the input speed ``r`` (relative to its 95th percentile, capped at 3)."""
     speed = np.abs(ctx.rate)
-    r = np.minimum(speed / (float(np.percentile(speed[ctx.train], 95)) or 1.0), 3.0)
-    xn = _normalised(ctx.x, ctx.train)
+    r = np.minimum(speed / (float(np.percentile(speed, 95)) or 1.0), 3.0)
+    xn = _normalised(ctx.x)
     columns = np.column_stack([ctx.branch * r, xn * r, r])
-    model = fit_arx("rate_dependence", ctx.x, ctx.y, ctx.train, columns, ["branch*speed", "x*speed", "speed"], ctx.dt)
-    model.extra["form"] = 1.0
-    return model
+    return _with_columns(ctx, "rate_dependence", columns, ["branch*speed", "x*speed", "speed"], form=1.0)
 
 
-def rate_dependence(ctx: Context) -> FittedModel:
-    """The better form (training RMSE) of velocity-squared friction and a rate-dependent weight."""
-    friction = _best_of(
-        ctx, "deflection_share_at_speed95", FRICTION_DEFLECTIONS, lambda share, it: _friction_model(ctx, share, it)
-    )
-    weight = _rate_weight_model(ctx)
-    score = {id(m): rmse(m.prediction[ctx.train], ctx.y[ctx.train]) for m in (friction, weight)}
-    return min((friction, weight), key=lambda m: score[id(m)] if np.isfinite(score[id(m)]) else np.inf)
+def rate_dependence(ctx: Context) -> Design:
+    """The better form (whole-record RMSE) of velocity-squared friction and a rate-dependent weight."""
+    friction = _best_of(FRICTION_DEFLECTIONS, partial(_friction, ctx), ctx)
+    weight = _rate_weight(ctx)
+    every = np.ones(ctx.y.size, dtype=bool)
+    return min((friction, weight), key=lambda d: _training_error(d.fit(ctx, every), ctx))
 
 
-def creep(ctx: Context) -> FittedModel:
-    """A creep operator: first-order relaxation of the hysteresis output, time constant by grid."""
-    taus = [tau for tau in CREEP_TAUS_S if tau <= 0.5 * ctx.y.size * ctx.dt] or [CREEP_TAUS_S[0]]
-    return _best_of(
-        ctx,
-        "creep_time_constant_s",
-        taus,
-        lambda tau, it: fit_hammerstein("creep", ctx.rows, ctx.y, ctx.train, ctx.dt, it, creep_tau_s=tau)[0],
-    )
+def _creep_spectrum(ctx: Context, sign: float) -> Design:
+    """The relaxations of :func:`creep` whose shares all have ``sign``: a time constant whose
+    share comes out with the other sign is dropped and the rest refitted (an active-set fit)."""
+    every = np.ones(ctx.y.size, dtype=bool)
+    taus = [tau for tau in CREEP_SPECTRUM_S if tau <= 0.5 * ctx.y.size * ctx.dt] or [CREEP_SPECTRUM_S[0]]
+    while taus:
+        columns = np.column_stack([slow_part(ctx.x, ctx.dt, tau) for tau in taus])
+        candidate = _with_columns(ctx, "creep", columns, [f"creep_{tau:g}s" for tau in taus])
+        model = candidate.fit(ctx, every)
+        shares = model.exogenous[model.nb : model.nb + len(taus)] / (model.exogenous[0] or 1.0)
+        if np.all(sign * shares >= 0):
+            candidate.extra = {f"creep_share_{tau:g}s": float(share) for tau, share in zip(taus, shares)}
+            return candidate
+        taus = [tau for tau, share in zip(taus, shares) if sign * share > 0]
+    return Design("creep", ctx.x, _empty(ctx.y.size), [], ctx.ar)  # no relaxation of this sign: the baseline
 
 
-def transport_delay(ctx: Context) -> FittedModel | None:
-    """A dead time before the hysteresis, the dynamics refitted with it.
+def creep(ctx: Context) -> Design:
+    """A creep spectrum: first-order relaxations of the hysteresis output at time constants
+    spread over :data:`CREEP_SPECTRUM_S` (a Prony series: logarithmic creep and creep with two
+    time constants are both sums of such terms), fitted jointly with the hysteresis.
+
+    Every relaxation of one record runs the same way: either the output keeps following the
+    input after it stops (delayed viscoelastic response: positive shares) or it relaxes back
+    under the held pressure and load (the muscle lengthening: negative shares). A fit whose
+    shares have mixed signs makes a band-pass out of relaxations, which fits some other error
+    (a lag, an overshoot of the mechanics); so each sign is fitted on its own and the one with
+    the lower whole-record error is kept."""
+    every = np.ones(ctx.y.size, dtype=bool)
+    fits = [_creep_spectrum(ctx, sign) for sign in (1.0, -1.0)]
+    return min(fits, key=lambda d: _training_error(d.fit(ctx, every), ctx))
+
+
+def transport_delay(ctx: Context) -> Design | None:
+    """A dead time before the hysteresis, the hysteresis and dynamics refitted with it.
 
     The baseline's actuator lag was chosen without a dead time, and a lag absorbs much of one
     (a 0.25 s lag for a 0.2 s dead time); so with ``ctx.joint_delay`` the dead time is screened
@@ -159,54 +250,59 @@ def transport_delay(ctx: Context) -> FittedModel | None:
     if ctx.joint_delay:
         shorter = [lag for lag in ctx.lag_rows if lag < ctx.lag_s]
         pairs += [(d, lag) for lag in shorter for d in JOINT_DELAYS_S if d in usable]
-    best, best_error = pairs[0], np.inf
-    for delay_s, lag_s in pairs:
-        model, _ = fit_hammerstein(
-            "transport_delay", delayed_rows(delay_s, lag_s), ctx.y, ctx.train, ctx.dt, SCREEN_ITERATIONS
-        )
-        error = rmse(model.prediction[ctx.train], ctx.y[ctx.train])
-        if np.isfinite(error) and error < best_error:
-            best, best_error = (delay_s, lag_s), error
-    model, _ = fit_hammerstein("transport_delay", delayed_rows(*best), ctx.y, ctx.train, ctx.dt, FULL_ITERATIONS)
-    model.extra["dead_time_s"] = float(best[0])
-    model.extra["actuator_lag_with_dead_time_s"] = float(best[1])
+
+    def design(index: float, iterations: int) -> Design:
+        delay_s, lag_s = pairs[int(index)]
+        x, ar = _hysteresis(ctx, delayed_rows(delay_s, lag_s), ctx.y, iterations)
+        extra = {"dead_time_s": delay_s, "actuator_lag_with_dead_time_s": lag_s}
+        return Design("transport_delay", x, _empty(ctx.y.size), [], ar, extra=extra)
+
+    return _best_of([float(i) for i in range(len(pairs))], design, ctx)
+
+
+def _four_terms(ctx: Context, name: str, v: NDArray[np.float64], label: str) -> Design:
+    """``v, v x, v x^2, v branch`` in the ARX drive: the curve shifts and bends, the loop widens or narrows."""
+    xn = _normalised(ctx.x)
+    columns = np.column_stack([v, v * xn, v * xn**2, v * ctx.branch])
+    model = _with_columns(ctx, name, columns, [label, f"{label}*x", f"{label}*x^2", f"{label}*branch"])
+    model.source = v
     return model
 
 
-def _four_terms(ctx: Context, name: str, v: NDArray[np.float64], label: str) -> FittedModel:
-    """``v, v x, v x^2, v branch`` in the ARX drive: the curve shifts and bends, the loop widens or narrows."""
-    xn = _normalised(ctx.x, ctx.train)
-    return fit_arx(
-        name,
-        ctx.x,
-        ctx.y,
-        ctx.train,
-        np.column_stack([v, v * xn, v * xn**2, v * ctx.branch]),
-        [label, f"{label}*x", f"{label}*x^2", f"{label}*branch"],
-        ctx.dt,
-    )
+COLUMNS = {"load_dependence": "load", "temperature_drift": "temperature"}
 
 
-def observed(ctx: Context, cause: str) -> FittedModel | None:
-    """Load or temperature terms; None when the column is missing or constant."""
-    column = {"load_dependence": "load", "temperature_drift": "temperature"}[cause]
-    values = ctx.extras.get(column)
+def observed(ctx: Context, cause: str, values: NDArray[np.float64] | None = None) -> Design | None:
+    """Load or temperature terms (of ``values`` in place of the column when given: a surrogate);
+    None when the column is missing or constant."""
+    column = COLUMNS[cause]
+    if values is None:
+        values = ctx.extras.get(column)
     if values is None or np.ptp(values) <= 0:
         return None
-    return _four_terms(ctx, cause, _normalised(values, ctx.train), column)
+    return _four_terms(ctx, cause, _normalised(values), column)
 
 
-def slow_drift(ctx: Context) -> FittedModel:
+def shifted_copies(values: NDArray[np.float64], count: int, rng: np.random.Generator) -> list[NDArray[np.float64]]:
+    """Surrogates of a measured column: mirrored at its end and shifted circularly by 10-90 % of
+    the record, so each is as smooth and as wide-ranging as the column but unrelated in time to
+    the output (a plain circular shift would put a jump in a warming curve)."""
+    n = values.size
+    mirrored = np.concatenate([values, values[::-1]])
+    offsets = rng.integers(int(0.1 * n), int(1.9 * n), count)
+    return [np.roll(mirrored, int(k))[:n] for k in offsets]
+
+
+def slow_drift(ctx: Context) -> Design:
     """The four terms of a measured column with a plain ramp in time in its place: the same
     flexibility (one given shape, four coefficients), so an observed cause has to explain more
     than time alone does. (Two or more free shapes of time would also fit whatever differs between
     the parts of a protocol, which is no drift.)"""
-    ramp = (ctx.t - ctx.t[ctx.train].mean()) / max(float(np.ptp(ctx.t)), ctx.dt)
-    return _four_terms(ctx, "slow_drift", _normalised(ramp, ctx.train), "time")
+    return _four_terms(ctx, "slow_drift", _normalised(ctx.t), "time")
 
 
-def extension(ctx: Context, cause: str) -> FittedModel | None:
-    """The model with ``cause``'s term, or None when the data cannot show it (column missing)."""
+def design(ctx: Context, cause: str) -> Design | None:
+    """``cause``'s model fitted on the whole record, or None when the data cannot show it (column missing)."""
     if cause == "rate_dependence":
         return rate_dependence(ctx)
     if cause == "creep":

@@ -53,8 +53,17 @@ class FittedModel:
     x_shift: float = 0.0  # x = rows @ masses + x_shift
 
 
-def static_masses(rows: NDArray[np.floating], y: NDArray[np.float64], train: NDArray[np.bool_]) -> NDArray[np.float64]:
-    """Cell masses >= 0 with ``y ~ rows @ masses + offset`` on ``train`` rows.
+def static_masses(
+    rows: NDArray[np.floating],
+    y: NDArray[np.float64],
+    train: NDArray[np.bool_],
+    free: NDArray[np.float64] | None = None,
+) -> NDArray[np.float64]:
+    """Cell masses >= 0 with ``y ~ rows @ masses + free @ d + offset`` on ``train`` rows.
+
+    ``free`` columns (an extension's terms) are fitted jointly with any sign: they are projected
+    out of the normal equations (a Schur complement), so that the term takes what it explains and
+    the masses do not absorb it first; only the masses are returned.
 
     The offset is eliminated by centring, then NNLS runs on the Cholesky factor of the centred
     normal equations (small: one column per Everett cell). The rows carry the hysteresis memory,
@@ -67,6 +76,15 @@ def static_masses(rows: NDArray[np.floating], y: NDArray[np.float64], train: NDA
     design -= design.mean(axis=0)  # centred explicitly: D^T D stays positive semi-definite
     centred = y[chosen] - y[chosen].mean()
     gram = design.T @ design
+    rhs = design.T @ centred
+    if free is not None and free.shape[1]:
+        f = free[chosen] - free[chosen].mean(axis=0)
+        f_gram = f.T @ f
+        f_gram += 1e-9 * (float(np.trace(f_gram)) or 1.0) * np.eye(len(f_gram))
+        cross = design.T @ f
+        gram = gram - cross @ np.linalg.solve(f_gram, cross.T)
+        rhs = rhs - cross @ np.linalg.solve(f_gram, f.T @ centred)
+        gram = 0.5 * (gram + gram.T)
     scale = max(float(np.trace(gram)) / len(gram), 1e-300)
     for ridge in (MASS_RIDGE, 1e-2):  # cells no training row visits make gram singular
         try:
@@ -76,15 +94,19 @@ def static_masses(rows: NDArray[np.floating], y: NDArray[np.float64], train: NDA
             continue
     else:
         raise np.linalg.LinAlgError("hysteresis normal equations are not positive definite even with a ridge")
-    masses, _ = nnls(factor.T, np.linalg.solve(factor, design.T @ centred), maxiter=20 * len(gram))
-    return masses
+    masses, _ = nnls(factor.T, np.linalg.solve(factor, rhs), maxiter=20 * len(gram))
+    return np.asarray(masses)
 
 
 def fit_static(
-    rows: NDArray[np.float32], y: NDArray[np.float64], train: NDArray[np.bool_]
+    rows: NDArray[np.float32],
+    y: NDArray[np.float64],
+    train: NDArray[np.bool_],
+    free: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Hysteresis output ``x`` for the whole record, fitted as if there were no dynamics, and its masses."""
-    masses = static_masses(rows, y, train)
+    """Hysteresis output ``x`` for the whole record, fitted as if there were no dynamics (jointly
+    with the ``free`` columns), and its masses."""
+    masses = static_masses(rows, y, train, free)
     x = rows.astype(np.float64) @ masses
     return x - x[train].mean() + y[train].mean(), masses
 
@@ -97,6 +119,8 @@ def fit_hammerstein(
     dt: float,
     iterations: int = 3,
     creep_tau_s: float | None = None,
+    columns: NDArray[np.float64] | None = None,
+    labels: list[str] | None = None,
 ) -> tuple[FittedModel, NDArray[np.float64]]:
     """Hysteresis and ARX fitted together by alternation (Narendra-Gallman).
 
@@ -108,14 +132,19 @@ def fit_hammerstein(
     With ``creep_tau_s`` the model also has a creep operator ``e (lowpass(x, tau) - x)`` in its
     drive; that term is linear in ``x``, so it joins the filtered regressors as
     ``e (1/A) creep(rows)`` and the hysteresis is fitted with the creep present.
+
+    ``columns`` (an extension's terms, ``labels`` their names) join the ARX drive and are fitted
+    jointly with the masses (as ``(1/A) columns``), so the masses do not absorb what they explain.
     """
+    free = np.zeros((y.size, 0)) if columns is None else columns
 
     def arx(x: NDArray[np.float64]) -> FittedModel:
-        if creep_tau_s is None:
-            return fit_arx(name, x, y, train, dt=dt)
-        return fit_arx(name, x, y, train, slow_part(x, dt, creep_tau_s)[:, None], ["creep"], dt)
+        extra, names = free, list(labels or [f"c{i}" for i in range(free.shape[1])])
+        if creep_tau_s is not None:
+            extra, names = np.column_stack([free, slow_part(x, dt, creep_tau_s)]), [*names, "creep"]
+        return fit_arx(name, x, y, train, extra, names, dt)
 
-    x, masses = fit_static(rows, y, train)
+    x, masses = fit_static(rows, y, train, free)
     model = arx(x)
     model.masses = masses
     model.x_shift = float(x[0] - dense_first(rows) @ masses)
@@ -128,8 +157,10 @@ def fit_hammerstein(
             break
         filtered = _filter_columns(b, a, dense)
         if creep_rows is not None:
-            filtered = filtered + model.exogenous[model.nb] * _filter_columns(np.ones(1), a, creep_rows)
-        masses = static_masses(filtered, y, train)
+            e = model.exogenous[model.nb + free.shape[1]]
+            filtered = filtered + e * _filter_columns(np.ones(1), a, creep_rows)
+        free_filtered = _filter_columns(np.ones(1), a, free) if free.shape[1] else None
+        masses = static_masses(filtered, y, train, free_filtered)
         x_new = dense @ masses
         candidate = arx(x_new)
         candidate.masses = masses
@@ -196,6 +227,26 @@ def fit_arx(
             best = (aic, model)
     assert best is not None, "ARX with na=0 is always stable"
     return best[1]
+
+
+def fit_gains(
+    name: str,
+    x: NDArray[np.float64],
+    y: NDArray[np.float64],
+    train: NDArray[np.bool_],
+    ar: NDArray[np.float64],
+    extra: NDArray[np.float64],
+    columns: list[str],
+) -> FittedModel:
+    """``y = (1/A) (b x + extra @ d + c)`` with the poles ``ar`` given: ``b``, ``d``, ``c`` by least
+    squares on the *simulated* output of the ``train`` rows (linear once the poles are fixed)."""
+    a = np.r_[1.0, -ar]
+    regressors = np.column_stack([x, extra, np.ones(y.size)])
+    if ar.size:
+        zi = lfilter_zi([1.0], a)[:, None] * regressors[:1]
+        regressors = lfilter([1.0], a, regressors, axis=0, zi=zi)[0]
+    theta = np.asarray(np.linalg.lstsq(regressors[train], y[train], rcond=None)[0], dtype=np.float64)
+    return FittedModel(name, regressors @ theta, ar.size, 1, ar.copy(), theta, columns=list(columns))
 
 
 def _steady_state(ar: NDArray[np.float64], y0: float) -> NDArray[np.float64]:

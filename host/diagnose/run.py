@@ -28,11 +28,21 @@ from threadpoolctl import threadpool_limits
 
 from edge.errors import DataError
 from host.data import Measurement
-from host.diagnose.candidates import CAUSES, Context, extension
+from host.diagnose.candidates import (
+    CAUSES,
+    COLUMNS,
+    OBSERVED_CAUSES,
+    Context,
+    Design,
+    baseline,
+    design,
+    observed,
+    shifted_copies,
+)
 from host.diagnose.decide import CandidateScore, choose, with_signatures
 from host.diagnose.evidence import baseline_evidence
 from host.diagnose.features import branch_offset, first_order, preisach_rows, smoothed_rate
-from host.diagnose.folds import BLOCKS_PER_FOLD, MIN_BLOCK_SAMPLES, check_folds, holdout_masks, in_range, noise_floor
+from host.diagnose.folds import BLOCKS_PER_FOLD, MIN_BLOCK_SAMPLES, check_folds, holdout_masks, noise_floor
 from host.diagnose.hammerstein import FittedModel, fit_hammerstein, rmse
 from host.diagnose.signatures import signatures
 from host.identify.common import memory_start
@@ -54,7 +64,9 @@ BASELINE_OUTLIER = 2.5
 JOINT_DELAY_P = 0.2
 # a hold's first second(s) are the baseline's own settling, not drift
 SETTLE_S = 1.0
-LARGE_PROBLEM_CELLS = 20_000_000  # rows x Everett cells above which a second BLAS thread pays
+LARGE_PROBLEM_CELLS = 20_000_000
+# shifted copies of each measured column: its surrogate p-value is at best 1 / (this + 1)
+COLUMN_SURROGATES = 9  # rows x Everett cells above which a second BLAS thread pays
 
 
 class DecimatedWarning(UserWarning):
@@ -74,6 +86,7 @@ class Diagnosis:
     decided_by: str
     confidence: dict[str, object]
     fold_gains: dict[str, list[float]]
+    column_surrogates: dict[str, dict[str, object]]
     baseline_full: FittedModel
     extended_full: FittedModel | None
     start_index: int
@@ -89,6 +102,7 @@ class Diagnosis:
             "confidence": self.confidence,
             "scores": self.scores,
             "fold_gains": self.fold_gains,
+            "column_surrogates": self.column_surrogates,
             "baseline_rmse": self.baseline_rmse,
             "extended_rmse": self.extended_rmse,
             "gain": self.gain,
@@ -165,8 +179,10 @@ def choose_actuator_lag(ctx: Context) -> float:
 
 
 def fit_baseline(ctx: Context) -> FittedModel:
-    """The baseline for ``ctx.train`` at ``ctx.lag_s``; sets ``ctx.x`` (the hysteresis output)."""
+    """The baseline on every row at ``ctx.lag_s``; sets ``ctx.x`` (the hysteresis output)."""
+    ctx.train = np.ones(ctx.y.size, dtype=bool)
     model, ctx.x = fit_hammerstein("baseline", ctx.rows, ctx.y, ctx.train, ctx.dt)
+    ctx.ar = model.ar
     model.extra["actuator_lag_s"] = ctx.lag_s
     return model
 
@@ -199,6 +215,56 @@ def diagnose(
         return _diagnose(m, folds, blocks_per_fold, levels, progress, notes)
 
 
+def _fold_errors(
+    ctx: Context, designs: dict[str, Design | None], held: NDArray[np.bool_]
+) -> dict[str, tuple[float, float] | None]:
+    """Per design, the held-out RMSE of the baseline and of the design on the rows the design can
+    be judged on (None: not available, or too few such rows)."""
+    train = ~held
+    base_design = designs["baseline"]
+    assert base_design is not None
+    base = base_design.fit(ctx, train).prediction
+    out: dict[str, tuple[float, float] | None] = {}
+    for name, d in designs.items():
+        if name == "baseline":
+            continue
+        if d is None:
+            out[name] = None
+            continue
+        rows = d.scored(train, held)
+        if rows.sum() < MIN_BLOCK_SAMPLES:
+            out[name] = (np.nan, np.nan)
+            continue
+        with np.errstate(all="ignore"):
+            prediction = d.fit(ctx, train).prediction
+        out[name] = (rmse(base[rows], ctx.y[rows]), rmse(prediction[rows], ctx.y[rows]))
+    return out
+
+
+def _column_nulls(
+    ctx: Context, designs: dict[str, Design | None], masks: list[NDArray[np.bool_]]
+) -> dict[str, list[float]]:
+    """Mean held-out gains of each measured column's terms with the column replaced by shifted
+    copies of itself (:func:`shifted_copies`): what a column of the same shape gains by chance
+    on this record, structural error and slow drifts included."""
+    rng = np.random.default_rng(0)
+    out: dict[str, list[float]] = {}
+    for cause in OBSERVED_CAUSES:
+        column = ctx.extras.get(COLUMNS[cause])
+        if designs.get(cause) is None or column is None:
+            continue
+        out[cause] = []
+        for values in shifted_copies(column, COLUMN_SURROGATES, rng):
+            surrogate = observed(ctx, cause, values)
+            gains = []
+            for held in masks:
+                pair = _fold_errors(ctx, {"baseline": designs["baseline"], cause: surrogate}, held)[cause]
+                if pair is not None and np.isfinite(pair[0]):
+                    gains.append(1.0 - pair[1] / pair[0] if np.isfinite(pair[1]) else -np.inf)
+            out[cause].append(float(np.mean(gains)) if gains else 0.0)
+    return out
+
+
 def _diagnose(
     m: Measurement, folds: int, blocks_per_fold: int, levels: int, progress: bool | None, notes: list[str]
 ) -> Diagnosis:
@@ -206,77 +272,50 @@ def _diagnose(
     n = ctx.y.size
     check_folds(folds, n, blocks_per_fold)
     masks = holdout_masks(n, folds, blocks_per_fold)
-    fold_rmse: list[tuple[float, dict[str, float | None]]] = []
-    skipped = 0
-    scored_rows = 0
-    with _progress(1 + folds * (1 + len(CAUSES)), progress) as bar:
+    with _progress(2 + len(CAUSES), progress) as bar:
         ctx.lag_s = choose_actuator_lag(ctx)
-        ctx.train = np.ones(n, dtype=bool)
         baseline_full = fit_baseline(ctx)
         found = signatures(
             ctx.y - baseline_full.prediction,
             ctx.y,
             baseline_full.prediction,
             ctx.u,
-            ctx.t,
-            ctx.x,
-            ctx.branch,
-            ctx.extras,
             ctx.dt,
             settle_s=SETTLE_S + 5.0 * ctx.lag_s,
         )
         delay_signature = found.get("transport_delay")
         ctx.joint_delay = delay_signature is not None and delay_signature.p_value <= JOINT_DELAY_P
         bar.update()
-        for held in masks:
-            ctx.train = ~held
-            baseline = fit_baseline(ctx)
-            scored = in_range(ctx.u, ctx.rows, ctx.train, held)
-            scored_rows += int(scored.sum())
-            bar.update()
-            if scored.sum() < MIN_BLOCK_SAMPLES:
-                skipped += 1
-                bar.update(len(CAUSES))
-                continue
-            base_rmse = rmse(baseline.prediction[scored], ctx.y[scored])
-            ext: dict[str, float | None] = {}
-            for cause in CAUSES:
-                with np.errstate(all="ignore"):
-                    model = extension(ctx, cause)
-                    ext[cause] = None if model is None else rmse(model.prediction[scored], ctx.y[scored])
-                bar.update()
-            fold_rmse.append((base_rmse, ext))
-    # a fold whose baseline is several times worse than the others' is a failed baseline fit
-    # (every candidate "gains" there); it says nothing about any candidate
-    typical = float(np.median([b for b, _ in fold_rmse])) if fold_rmse else 0.0
-    kept = [(b, e) for b, e in fold_rmse if b <= BASELINE_OUTLIER * typical]
-    if len(kept) < len(fold_rmse):
-        notes.append(
-            f"{len(fold_rmse) - len(kept)} fold(s) left out: the baseline's held-out error there is more than "
-            f"{BASELINE_OUTLIER:g} x the median fold's (a failed baseline fit)"
-        )
-    scores = {c: CandidateScore(c) for c in CAUSES}
-    base_scores = [b for b, _ in kept]
-    ext_scores: dict[str, list[float]] = {c: [] for c in CAUSES}
-    for base_rmse, ext in kept:
+        designs: dict[str, Design | None] = {"baseline": baseline(ctx, baseline_full)}
         for cause in CAUSES:
-            scores[cause].add(base_rmse, ext[cause])
-            ext_scores[cause].append(base_rmse if ext[cause] is None else float(ext[cause]))  # type: ignore[arg-type]
-    if not base_scores:
-        raise DataError(
-            f"{m.source}: no fold has held-out rows inside the training input range; record the full "
-            "range more than once (or use fewer folds)"
-        )
-    if skipped:
-        notes.append(
-            f"{skipped} of {folds} folds had fewer than {MIN_BLOCK_SAMPLES} in-range held-out rows and were not scored"
-        )
+            with np.errstate(all="ignore"):
+                designs[cause] = design(ctx, cause)
+            bar.update()
+        fold_errors = [_fold_errors(ctx, designs, held) for held in masks]
+        null_gains = _column_nulls(ctx, designs, masks)
+        bar.update()
+    scores = {c: CandidateScore(c, null_gains=null_gains.get(c, [])) for c in CAUSES}
+    base_scores: dict[str, list[float]] = {c: [] for c in CAUSES}
+    ext_scores: dict[str, list[float]] = {c: [] for c in CAUSES}
+    for errors in fold_errors:
+        for cause in CAUSES:
+            pair = errors[cause]
+            if pair is None:
+                scores[cause].add(1.0, None)
+            elif not np.isfinite(pair[0]):  # too few rows it can be judged on in this fold
+                scores[cause].all_gains.append(float("nan"))
+            else:
+                scores[cause].add(*pair)
+                base_scores[cause].append(pair[0])
+                ext_scores[cause].append(pair[1])
     noise = noise_floor(ctx.y)
-    ctx.train = np.ones(n, dtype=bool)
-    baseline_full = fit_baseline(ctx)  # again: the folds left ctx.x at their own fits
-    verdict = with_signatures(choose(scores, noise), scores, found, noise)
+    time_correlation = {
+        name: float(np.corrcoef(values, ctx.t)[0, 1]) for name, values in ctx.extras.items() if np.ptp(values) > 0
+    }
+    verdict = with_signatures(choose(scores, noise, time_correlation), scores, found, noise)
     cause = verdict.cause
-    extended_full = extension(ctx, cause) if cause != "none" else None
+    chosen = designs.get(cause) if cause != "none" else None
+    extended_full = chosen.fit(ctx, np.ones(n, dtype=bool)) if chosen is not None else None
     evidence = baseline_evidence(baseline_full.prediction - ctx.y, ctx.u, ctx.rate, ctx.extras, ctx.dt)
     evidence["noise_floor"] = noise
     evidence["signatures"] = {c: g.as_json() for c, g in found.items()}
@@ -290,9 +329,11 @@ def _diagnose(
             )
         else:
             reason += "; the baseline's residual is white: what remains looks like noise"
-    baseline_rmse = float(np.mean(base_scores))
+    # the baseline's held-out error on the rows of the named cause (every row when none is named:
+    # the rate-dependence term is judged on all held-out rows)
+    reference = cause if cause != "none" else "rate_dependence"
+    baseline_rmse = float(np.mean(base_scores[reference])) if base_scores[reference] else float("nan")
     extended_rmse = float(np.mean(ext_scores[cause])) if cause != "none" else baseline_rmse
-    scored_share = scored_rows / n  # every row is held out once
     return Diagnosis(
         cause=cause,
         scores={c: s.mean for c, s in scores.items()},
@@ -302,15 +343,18 @@ def _diagnose(
         holdout=(
             f"{folds * blocks_per_fold} contiguous blocks in time after sample {start_index} (where the "
             f"hysteresis memory is known), dealt to {folds} folds in turn ({blocks_per_fold} blocks of "
-            f"{n * ctx.dt / (folds * blocks_per_fold):.0f} s each); each fold held out once, models fitted on "
-            "the other folds' blocks, simulated over the whole record and scored on held-out rows inside the "
-            f"identified range ({scored_share:.0%} of the rows); RMSE averaged over the folds"
+            f"{n * ctx.dt / (folds * blocks_per_fold):.0f} s each); each model's hysteresis identified on the "
+            "whole record, its dynamics and term coefficients fitted on the other folds' blocks, simulated over "
+            "the whole record and scored on the held-out blocks; RMSE averaged over the folds"
         ),
         extended_model=_describe(extended_full, ctx) if extended_full else {"name": "baseline (no extension)"},
         reason=reason,
         decided_by=verdict.decided_by,
         confidence=verdict.confidence,
         fold_gains={c: s.all_gains for c, s in scores.items()},
+        column_surrogates={
+            c: {"p_value": s.surrogate_p, "mean_gains": s.null_gains} for c, s in scores.items() if s.null_gains
+        },
         baseline_full=baseline_full,
         extended_full=extended_full,
         start_index=start_index,

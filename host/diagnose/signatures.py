@@ -13,9 +13,9 @@ too few reversals, no column).
   baseline's own simulation by the same time, whatever the speed (an actuator lag is already in
   the baseline; a speed-dependent lag grows with speed). Null: random signs of the per-reversal
   extra lags.
-* ``load_dependence`` / ``temperature_drift``: the column's four terms explain residual that a
-  ramp in time of the same four terms does not (a partial F statistic). Null: the column,
-  mirrored at its end, circularly shifted against the record.
+
+Measured columns (load, temperature) are tested on the held-out gain itself, against shifted
+copies of the column (:func:`host.diagnose.candidates.shifted_copies`), not here.
 """
 
 from __future__ import annotations
@@ -31,7 +31,6 @@ SURROGATES = 400
 MIN_HOLDS = 4
 HOLD_S = 4.0
 MIN_REVERSALS = 6
-MAX_SIGNATURE_ROWS = 4000
 MIN_LAG_SAMPLES = 2
 
 
@@ -172,65 +171,11 @@ def dead_time_signature(y: Array, simulated: Array, u: Array, dt: float, rng: np
     )
 
 
-def _rss(design: Array, target: Array) -> float:
-    coef, *_ = np.linalg.lstsq(design, target, rcond=None)
-    return float(np.sum((target - design @ coef) ** 2))
-
-
-def _terms(v: Array, xn: Array, branch: Array) -> Array:
-    v = (v - v.mean()) / (float(v.std()) or 1.0)
-    return np.column_stack([v, v * xn, v * xn**2, v * branch])
-
-
-def column_signature(
-    cause: str,
-    residual: Array,
-    column: Array,
-    t: Array,
-    x: Array,
-    branch: Array,
-    rng: np.random.Generator,
-) -> Signature | None:
-    """Partial F of the column's four terms over a ramp in time's four terms; circular-shift null."""
-    if np.ptp(column) <= 0:
-        return None
-    step = max(1, residual.size // MAX_SIGNATURE_ROWS)
-    r, v, tt, xs, br = residual[::step], column[::step], t[::step], x[::step], branch[::step]
-    xn = (xs - xs.mean()) / (float(xs.std()) or 1.0)
-    base = np.column_stack([np.ones_like(r), xn, _terms(tt, xn, br)])
-    rss_base = _rss(base, r)
-
-    def statistic(values: Array) -> float:
-        return 1.0 - _rss(np.column_stack([base, _terms(values, xn, br)]), r) / rss_base
-
-    observed = statistic(v)
-    # surrogates: the column mirrored at its end and shifted circularly, so each is as smooth as
-    # the column (a plain circular shift puts a jump in a warming curve, and a jump explains
-    # piecewise structural error a smooth column cannot: the null would be too easy to beat for
-    # smooth columns and too hard for steps; tuning records: p <= 0.005 on 2 of 10 effect-free)
-    n = v.size
-    mirrored = np.concatenate([v, v[::-1]])
-    offsets = rng.integers(int(0.1 * n), int(1.9 * n), SURROGATES // 2)
-    null = np.array([statistic(np.roll(mirrored, int(k))[:n]) for k in offsets])
-    p = float((1 + np.sum(null >= observed)) / (1 + null.size))
-    return Signature(
-        cause,
-        observed,
-        p,
-        f"the column explains {observed:.1%} of the residual a ramp in time leaves "
-        f"(shifted-column surrogates: median {np.median(null):.1%}), p = {p:.2g}",
-    )
-
-
 def signatures(
     residual: Array,
     y: Array,
     simulated: Array,
     u: Array,
-    t: Array,
-    x: Array,
-    branch: Array,
-    extras: dict[str, Array],
     dt: float,
     settle_s: float,
     seed: int = 0,
@@ -241,7 +186,4 @@ def signatures(
         "creep": creep_signature(residual, u, dt, settle_s, rng),
         "transport_delay": dead_time_signature(y, simulated, u, dt, rng),
     }
-    for cause, column in (("load_dependence", "load"), ("temperature_drift", "temperature")):
-        if column in extras:
-            out[cause] = column_signature(cause, residual, extras[column], t, x, branch, rng)
     return {c: s for c, s in out.items() if s is not None}
