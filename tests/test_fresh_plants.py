@@ -46,7 +46,7 @@ def _simulated(case: family.Case) -> dict[str, Any]:
 
 
 def test_cases_cover_every_form_on_every_new_core_with_new_protocols_and_rates() -> None:
-    assert not set(FRESH_PLANTS) & set(family.TUNING_PLANTS + family.HELD_OUT_PLANTS)
+    assert not set(FRESH_PLANTS) & set(family.TUNING_PLANTS + family.SECOND_TUNING_PLANTS)
     assert len(FRESH_PLANTS) >= 3
     per_plant = Counter((c.plant, c.effect, c.form) for c in CASES)
     for plant in FRESH_PLANTS:

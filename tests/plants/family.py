@@ -1,9 +1,12 @@
-"""The plant family: cases, recordings, and the tuning / held-out split (fixed up front).
+"""The first plant family: cases and recordings. Every plant here is a *tuning* plant.
 
-Tuning set: the Bouc-Wen plant and the HIL. Held-out set: the generalised-play plant and the
-friction-spring plant, never used to choose a method or a constant. Each set has every effect
-in both of its forms on each plant (the HIL has one form per effect) and effect-free records.
-Protocols and sample rates (50-500 Hz) rotate over the cases.
+The Bouc-Wen plant and the HIL were the tuning set from the start; the generalised-play and
+friction-spring plants were held out at first, but their per-candidate scores were read while
+the method was reworked, so they are tuning plants now too (:func:`tuning_cases` keeps their
+records exactly as they were: the second group is numbered from zero as before). The held-out
+set is :mod:`tests.plants.fresh_family`, built separately and never used to choose anything.
+Every effect appears in both of its forms on each plant (the HIL has one form per effect), with
+effect-free records; protocols and sample rates (50-500 Hz) rotate over the cases.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from tests.plants.protocols import PROTOCOLS, with_conditioning
 RATES_HZ = (50.0, 100.0, 200.0, 500.0)
 NOISE_MM = 0.03
 TUNING_PLANTS = ("bouc_wen", "hil")
-HELD_OUT_PLANTS = ("generalised_play", "friction_spring")
+SECOND_TUNING_PLANTS = ("generalised_play", "friction_spring")  # held out until diagnose v4
 NONE_PER_PLANT = 5
 
 
@@ -58,11 +61,8 @@ def cases(plants: tuple[str, ...], duration_s: float = 150.0) -> list[Case]:
 
 
 def tuning_cases(duration_s: float = 150.0) -> list[Case]:
-    return cases(TUNING_PLANTS, duration_s)
-
-
-def held_out_cases(duration_s: float = 150.0) -> list[Case]:
-    return cases(HELD_OUT_PLANTS, duration_s)
+    """Every case of the four tuning plants (55 records: 35 with an effect, 20 without)."""
+    return cases(TUNING_PLANTS, duration_s) + cases(SECOND_TUNING_PLANTS, duration_s)
 
 
 def measurement(case: Case) -> tuple[Measurement, dict[str, object]]:
