@@ -227,25 +227,28 @@ FRESH_CORES: dict[str, Core] = {
 RATE_INDEPENDENT = ("coleman_hodgdon", "kp_sum")
 
 
+def _muscle(rng: np.random.Generator, peak: float) -> dict[str, float]:
+    """The force-balance parameters the Duhem and relay cores share (drawn in this order)."""
+    return {
+        "peak": peak,
+        "stroke_mm": rng.uniform(35.0, 55.0),
+        "preload": rng.uniform(0.02, 0.06),
+        "f0_n": rng.uniform(500.0, 900.0),
+        "k": rng.uniform(0.4, 1.0),
+    }
+
+
 def draw_fresh_params(core: str, rng: np.random.Generator, peak: float) -> dict[str, float]:
     """Plausible parameters for ``core`` (stroke 30-60 mm of a ~200 mm muscle, output span ~12-40 mm)."""
     if core == "coleman_hodgdon":
         return {
-            "peak": peak,
-            "stroke_mm": rng.uniform(35.0, 55.0),
-            "preload": rng.uniform(0.02, 0.06),
-            "f0_n": rng.uniform(500.0, 900.0),
-            "k": rng.uniform(0.4, 1.0),
+            **_muscle(rng, peak),
             "alpha": rng.uniform(2.5, 5.0),
             "gamma": rng.uniform(0.5, 0.7),
         }
     if core == "kp_sum":
         return {
-            "peak": peak,
-            "stroke_mm": rng.uniform(35.0, 55.0),
-            "preload": rng.uniform(0.02, 0.06),
-            "f0_n": rng.uniform(500.0, 900.0),
-            "k": rng.uniform(0.4, 1.0),
+            **_muscle(rng, peak),
             "share": rng.uniform(0.35, 0.6),
             "mid1": rng.uniform(0.3, 0.5),
             "half1": rng.uniform(0.05, 0.12),
