@@ -199,16 +199,17 @@ def test_the_velocity_squared_lag_trails_a_ramp_by_alpha_v_squared():
     assert np.array_equal(velocity_squared_lag(target, dt, 0.0), target)
 
 
-def test_held_out_rows_outside_the_identified_range_are_not_scored():
-    from host.diagnose.folds import in_range
+def test_a_column_term_is_judged_only_inside_the_columns_training_range():
+    from host.diagnose.candidates import Design
 
-    u = np.r_[np.linspace(0, 1, 100), np.linspace(0.5, 0.8, 300)]
-    rows = np.c_[(u < 0.2).astype(np.float32), u.astype(np.float32)]
-    held = np.zeros(u.size, dtype=bool)
-    held[:100] = True
-    scored = in_range(u, rows, ~held, held)
-    assert not scored[:45].any()  # below the training range (and its cell never switched in training)
-    assert not scored[100:].any()  # not held out
+    temperature = np.linspace(20.0, 40.0, 400)
+    d = Design("temperature_drift", np.zeros(400), np.zeros((400, 0)), [], np.zeros(0), source=temperature)
+    held = np.zeros(400, dtype=bool)
+    held[:100] = True  # the coolest quarter: below everything the training rows saw
+    held[200:300] = True  # inside
+    scored = d.scored(~held, held)
+    assert not scored[:100].any() and scored[200:300].all() and not scored[100:200].any()
+    assert np.array_equal(Design("creep", np.zeros(400), np.zeros((400, 0)), [], np.zeros(0)).scored(~held, held), held)
 
 
 def test_noise_floor_reads_the_white_noise_not_the_signal():

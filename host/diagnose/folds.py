@@ -1,9 +1,9 @@
-"""Held-out folds, the rows each fold may be scored on, and the record's noise floor.
+"""Held-out folds and the record's noise floor.
 
-A fold is scored only where the model is inside its identified range: held-out rows whose input
-lies outside the range the training rows cover ask the hysteresis for cells no training row
-visited (a record that starts vented and then stays high puts the only low-pressure data in one
-block), so their error says nothing about any candidate.
+Which held-out rows a model is judged on is the model's business
+(:meth:`host.diagnose.candidates.Design.scored`): every model's hysteresis is identified on the
+whole record, so the input range no longer limits the rows; a term of a measured column is
+judged only where the column lies inside its training range.
 """
 
 from __future__ import annotations
@@ -15,10 +15,6 @@ from edge.errors import DataError
 
 BLOCKS_PER_FOLD = 3
 MIN_BLOCK_SAMPLES = 50
-# a held-out row is in range when its input is inside the training input range, shrunk by this
-# share of the whole range on each side (the Everett grid's cells near the edge need visits too)
-RANGE_MARGIN = 0.01
-CELL_TOLERANCE = 0.02  # of a cell's regressor (0..1 for a cell fully switched)
 
 
 def check_folds(folds: int, n: int, blocks_per_fold: int = BLOCKS_PER_FOLD) -> None:
@@ -44,25 +40,6 @@ def holdout_masks(n: int, folds: int, blocks_per_fold: int = BLOCKS_PER_FOLD) ->
     for j in range(blocks):
         masks[j % folds][edges[j] : edges[j + 1]] = True
     return masks
-
-
-def in_range(
-    u: NDArray[np.float64], rows: NDArray[np.float32], train: NDArray[np.bool_], held: NDArray[np.bool_]
-) -> NDArray[np.bool_]:
-    """Held-out rows inside the identified range: the input inside the training input range, and
-    every Everett cell's regressor inside the values training saw for it (a cell that stayed
-    switched on throughout training, e.g. below the lowest training input, has an unidentified mass)."""
-    margin = RANGE_MARGIN * float(np.ptp(u))
-    lo, hi = float(u[train].min()) - margin, float(u[train].max()) + margin
-    ok = held & (u >= lo) & (u <= hi)
-    cell_lo = rows[train].min(axis=0) - CELL_TOLERANCE
-    cell_hi = rows[train].max(axis=0) + CELL_TOLERANCE
-    candidates = np.flatnonzero(ok)
-    for start in range(0, candidates.size, 8192):  # in chunks: rows are (n, cells)
-        idx = candidates[start : start + 8192]
-        block = rows[idx]
-        ok[idx] = np.all((block >= cell_lo) & (block <= cell_hi), axis=1)
-    return ok
 
 
 def noise_floor(y: NDArray[np.float64]) -> float:

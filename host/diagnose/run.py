@@ -1,15 +1,18 @@
 """The diagnosis: baseline vs physically motivated extensions on blocked held-out data.
 
-1. The record after the first sample where the memory is known is cut into
-   ``folds * blocks_per_fold`` contiguous blocks, dealt to the folds in turn
-   (:func:`host.diagnose.folds.holdout_masks`). For each fold the models are fitted on the other
-   folds' rows and scored (RMSE) on the fold's held-out rows inside the training input range.
-2. Each extension adds one physical term (:mod:`host.diagnose.candidates`); its score per fold
-   is the relative reduction of held-out RMSE against the baseline.
+1. The baseline and each extension (one physical term, :mod:`host.diagnose.candidates`) are
+   identified on the whole record after the first sample where the memory is known: hysteresis
+   jointly with the term.
+2. That record is cut into ``folds * blocks_per_fold`` contiguous blocks, dealt to the folds in
+   turn (:func:`host.diagnose.folds.holdout_masks`). For each fold every model's gain, offset and
+   term coefficients are refitted on the other folds' rows and scored (RMSE) on the held-out rows
+   it can be judged on; a candidate's score per fold is its relative reduction of held-out RMSE
+   against the baseline on the same rows. A measured column's terms are also scored with nine
+   shifted copies of the column in its place (the surrogate null of that cause).
 3. :func:`host.diagnose.decide.choose` names the cause with calibrated evidence, or ``none``
    with the reason; :func:`host.diagnose.decide.with_signatures` then applies the two-stage rule:
    a residual signature (:mod:`host.diagnose.signatures`, surrogate-calibrated) nominates a cause
-   that the held-out gain confirms, and withdraws a held-out verdict its own signature contradicts.
+   that the held-out gain confirms.
 
 Records longer than :data:`MAX_WORK_SAMPLES` are decimated (block means, an anti-alias filter)
 with a warning; BLAS threads are sized to the problem (small least-squares problems run fastest
