@@ -149,12 +149,11 @@ def _hysteresis(
     rows: NDArray[np.float32],
     target: NDArray[np.float64],
     iterations: int,
-    creep_tau_s: float | None = None,
     columns: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The hysteresis output and the poles of a model fitted on every row (jointly with ``columns``)."""
     every = np.ones(ctx.y.size, dtype=bool)
-    model, x = fit_hammerstein("x", rows, target, every, ctx.dt, iterations, creep_tau_s=creep_tau_s, columns=columns)
+    model, x = fit_hammerstein("x", rows, target, every, ctx.dt, iterations, columns=columns)
     return x, model.ar
 
 

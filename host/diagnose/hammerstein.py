@@ -7,12 +7,13 @@ Preisach hysteresis ``x = rows @ E`` (non-negative cell masses), followed by all
 rows. Hysteresis and dynamics are fitted together by alternation (:func:`fit_hammerstein`) and
 simulated (output error) over the whole record.
 
-Extensions either add exogenous columns to the ARX drive (load and temperature terms), add a
-creep operator inside the alternation, refit the whole model on other hysteresis rows (a dead
-time: delayed rows), or refit it to an equation-error target and pass its output through an
-element (rate-dependent friction: ``host.diagnose.run._rate_model``). Every fit sees only the
-rows marked in ``train``; the memory (input history) is the whole record, since the input is
-known everywhere.
+Extensions either add columns to the ARX drive, fitted jointly with the masses (load,
+temperature, drift, rate weight, creep relaxations), refit the whole model on other hysteresis
+rows (a dead time: delayed rows), or refit it to an equation-error target and pass its output
+through an element (velocity-squared friction: ``host.diagnose.candidates._friction``).
+:func:`fit_gains` refits gains and term coefficients with the poles given (what a held-out fold
+does). Every fit sees only the rows marked in ``train``; the memory (input history) is the
+whole record, since the input is known everywhere.
 """
 
 from __future__ import annotations
@@ -23,8 +24,6 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import nnls
 from scipy.signal import lfilter, lfilter_zi
-
-from host.diagnose.features import slow_part
 
 # all-pole dynamics: the rig's mechanics after the muscle are low-pass; a zero would put
 # derivative action in the baseline, which mimics rate-dependent hysteresis
@@ -118,7 +117,6 @@ def fit_hammerstein(
     train: NDArray[np.bool_],
     dt: float,
     iterations: int = 3,
-    creep_tau_s: float | None = None,
     columns: NDArray[np.float64] | None = None,
     labels: list[str] | None = None,
 ) -> tuple[FittedModel, NDArray[np.float64]]:
@@ -129,36 +127,25 @@ def fit_hammerstein(
     (``y = (B/A) rows @ masses + c`` is linear in the masses), and repeat. Returns the model and
     its hysteresis output ``x``.
 
-    With ``creep_tau_s`` the model also has a creep operator ``e (lowpass(x, tau) - x)`` in its
-    drive; that term is linear in ``x``, so it joins the filtered regressors as
-    ``e (1/A) creep(rows)`` and the hysteresis is fitted with the creep present.
-
     ``columns`` (an extension's terms, ``labels`` their names) join the ARX drive and are fitted
     jointly with the masses (as ``(1/A) columns``), so the masses do not absorb what they explain.
     """
     free = np.zeros((y.size, 0)) if columns is None else columns
 
     def arx(x: NDArray[np.float64]) -> FittedModel:
-        extra, names = free, list(labels or [f"c{i}" for i in range(free.shape[1])])
-        if creep_tau_s is not None:
-            extra, names = np.column_stack([free, slow_part(x, dt, creep_tau_s)]), [*names, "creep"]
-        return fit_arx(name, x, y, train, extra, names, dt)
+        return fit_arx(name, x, y, train, free, list(labels or [f"c{i}" for i in range(free.shape[1])]), dt)
 
     x, masses = fit_static(rows, y, train, free)
     model = arx(x)
     model.masses = masses
     model.x_shift = float(x[0] - dense_first(rows) @ masses)
     dense = rows.astype(np.float64)
-    creep_rows = slow_part(dense, dt, creep_tau_s) if creep_tau_s is not None else None
     for _ in range(iterations):
         b = model.exogenous[: model.nb]
         a = np.r_[1.0, -model.ar]
         if abs(b.sum()) < 1e-12:
             break
         filtered = _filter_columns(b, a, dense)
-        if creep_rows is not None:
-            e = model.exogenous[model.nb + free.shape[1]]
-            filtered = filtered + e * _filter_columns(np.ones(1), a, creep_rows)
         free_filtered = _filter_columns(np.ones(1), a, free) if free.shape[1] else None
         masses = static_masses(filtered, y, train, free_filtered)
         x_new = dense @ masses

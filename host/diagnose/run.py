@@ -61,15 +61,14 @@ MIN_SAMPLES = 400
 # error (tuning plants); 16 halves it at 1.7x the cost
 PREISACH_LEVELS = 16
 MAX_WORK_SAMPLES = 30_000
-BASELINE_OUTLIER = 2.5
 # the dead-time signature at or below this p asks for a dead time screened jointly with the
 # shorter actuator lags (the baseline's lag may have absorbed it); cheaper than always doing so
 JOINT_DELAY_P = 0.2
 # a hold's first second(s) are the baseline's own settling, not drift
 SETTLE_S = 1.0
-LARGE_PROBLEM_CELLS = 20_000_000
+LARGE_PROBLEM_CELLS = 20_000_000  # rows x Everett cells above which a second BLAS thread pays
 # shifted copies of each measured column: its surrogate p-value is at best 1 / (this + 1)
-COLUMN_SURROGATES = 9  # rows x Everett cells above which a second BLAS thread pays
+COLUMN_SURROGATES = 9
 
 
 class DecimatedWarning(UserWarning):
