@@ -72,6 +72,28 @@ def test_an_observed_cause_must_beat_a_slow_drift_of_the_same_flexibility():
     assert v.cause == "temperature_drift" and "slow drift" in v.decided_by
 
 
+def test_the_drift_yardstick_ignores_folds_where_either_fit_failed_and_needs_two_folds():
+    from host.diagnose.decide import why_not
+
+    load = scored("load_dependence", [0.15, 0.14, 0.16])
+    drift = scored("slow_drift", [0.20, -4.0, 0.21])  # the drift blew up on fold 2
+    reason = why_not(load, 0.0, drift)  # behind the drift on both folds where both fits held
+    assert reason is not None and "slow drift" in reason
+    one_fold = {c: scored(c, [0.0, 0.001]) for c in CAUSES}
+    one_fold["creep"] = scored("creep", [0.30, -9.0])  # one valid fold of two
+    v = choose(one_fold, 0.0)
+    assert v.cause == "none" and "fewer than two folds" in v.reason
+
+
+def test_non_finite_numbers_become_null_in_the_json():
+    from host.diagnose.run import finite_or_null
+
+    payload = {"fold_gains": {"creep": [0.1, float("nan"), float("-inf")]}, "gain": np.float64(0.2)}
+    out = finite_or_null(payload)
+    assert out == {"fold_gains": {"creep": [0.1, None, None]}, "gain": 0.2}
+    json.dumps(out, allow_nan=False)
+
+
 def test_a_temperature_that_follows_time_is_named_with_the_confound():
     drift = [0.14, 0.16, 0.15, 0.13]
     scores = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}

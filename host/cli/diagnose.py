@@ -35,7 +35,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _write_json(target: str, payload: object) -> None:
-    text = json.dumps(payload, indent=2, default=float) + "\n"
+    """Strict JSON (no NaN or Infinity: non-finite numbers are written as null)."""
+    from host.diagnose.run import finite_or_null
+
+    text = json.dumps(finite_or_null(payload), indent=2, default=float, allow_nan=False) + "\n"
     if target == "-":
         sys.stdout.write(text)
         return

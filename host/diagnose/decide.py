@@ -14,12 +14,13 @@ candidate can be judged on. A candidate passes when
 * a measured column (load, temperature) gains more than every one of its shifted copies
   (surrogate p <= :data:`SURROGATE_ALPHA`: a column of the same shape unrelated in time to the
   output does not explain as much) and beats ``slow_drift``, the same flexibility in time alone,
-  by :data:`DRIFT_MARGIN` on average and on all folds but one.
+  by :data:`DRIFT_MARGIN` on average and is ahead of it on all folds but one (both judged on
+  the same rows).
 
 ``slow_drift`` names a drift no column explains only when no physical cause passes: it is the
-yardstick, and a creep or a load effect that it also fits is the better explanation. When the
-temperature column follows time too closely to tell the two apart (|r| >= :data:`CONFOUNDED_R`)
-and both explain the drift, the verdict is ``temperature_drift`` with that confound stated.
+yardstick, and a creep or a load effect that it also fits is the better explanation. When a
+measured column follows time too closely to tell the two apart (|r| >= :data:`CONFOUNDED_R`)
+and both explain the drift, the verdict names the column's cause with that confound stated.
 
 Among the physical candidates that pass the highest mean gain wins. :func:`with_signatures` then
 applies the two-stage rule: a residual signature (:mod:`host.diagnose.signatures`) at p <=
@@ -37,7 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from host.diagnose.candidates import CAUSES, OBSERVED_CAUSES
+from host.diagnose.candidates import CAUSES, COLUMNS, OBSERVED_CAUSES
 from host.diagnose.signatures import Signature
 
 GAIN_FLOOR = 0.08
@@ -64,6 +65,9 @@ class CandidateScore:
     failed_folds: int = 0
     available: bool = True
     null_gains: list[float] = field(default_factory=list)  # mean gains of surrogate columns
+    # per fold, this candidate's gain minus slow_drift's, both on the rows both can be judged on
+    # (None: not both valid there); set only for measured columns
+    drift_margins: list[float | None] = field(default_factory=list)
 
     def add(self, base_rmse: float, ext_rmse: float | None) -> None:
         if ext_rmse is None:  # the data cannot show this term (column missing)
@@ -120,11 +124,11 @@ def against_baseline(s: CandidateScore, noise: float, surrogates: bool = True) -
     """None when ``s`` beats the baseline convincingly (fit held, mean gain, worst fold, noise
     floor, and with ``surrogates`` its column's shifted copies)."""
     if not s.available:
-        return "its column is missing or constant"
+        return "its column is missing or constant" if s.cause in OBSERVED_CAUSES else "the record cannot show it"
     if s.failed:
         return f"its fit blew up on {s.failed_folds} folds (a failed fit, not evidence)"
-    if not s.gains:
-        return "no fold has held-out rows it can be judged on"
+    if len(s.gains) < 2:
+        return f"fewer than two folds have held-out rows it can be judged on ({len(s.gains)})"
     if s.mean < GAIN_FLOOR:
         return f"its mean gain {s.mean:+.1%} is below {GAIN_FLOOR:.0%} (fold gains {_folds(s.gains)})"
     if s.worst < WORST_FOLD:
@@ -146,15 +150,20 @@ def against_baseline(s: CandidateScore, noise: float, surrogates: bool = True) -
 
 
 def against_drift(s: CandidateScore, drift: CandidateScore) -> str | None:
-    """None when an observed cause explains more than a slow drift in time of the same flexibility."""
-    paired = [a - b for a, b in zip(s.all_gains, drift.all_gains) if np.isfinite(a) and np.isfinite(b)]
+    """None when an observed cause explains more than a slow drift in time of the same flexibility:
+    its gain minus the drift's, on the rows both are judged on and folds both fits held on, is at
+    least :data:`DRIFT_MARGIN` on average and positive on all folds but one."""
+    if s.drift_margins:
+        paired = [m for m in s.drift_margins if m is not None and np.isfinite(m)]
+    else:  # no shared rows recorded: the folds' own gains, where both fits held
+        paired = [a - b for a, b in zip(s.all_gains, drift.all_gains) if a > 1 - BLOWUP_RATIO and b > 1 - BLOWUP_RATIO]
     if not paired:
         return None
     margin = float(np.mean(paired))
     if margin < DRIFT_MARGIN or sum(d > 0 for d in paired) < len(paired) - 1:
         return (
-            f"it explains no more than a slow drift in time of the same flexibility does "
-            f"(margin {margin:+.1%} on average, {DRIFT_MARGIN:.0%} needed on all folds but one: {_folds(paired)})"
+            f"it explains no more than a slow drift in time of the same flexibility does (margin "
+            f"{margin:+.1%} on average, {DRIFT_MARGIN:.0%} needed, and positive on all folds but one: {_folds(paired)})"
         )
     return None
 
@@ -171,7 +180,7 @@ def choose(
     scores: dict[str, CandidateScore], noise: float, time_correlation: dict[str, float] | None = None
 ) -> Verdict:
     """The verdict over every candidate's fold record (see the module docstring).
-    ``time_correlation``: each measured column's correlation with time on the scored rows."""
+    ``time_correlation``: each measured column's correlation with time over the record."""
     drift = scores.get("slow_drift")
     reasons = {c: why_not(s, noise, drift) for c, s in scores.items()}
     passing = [c for c in CAUSES if c in scores and reasons[c] is None]
@@ -183,17 +192,24 @@ def choose(
         best = max(physical, key=lambda c: scores[c].mean)
     elif passing:  # only the drift in time
         best = "slow_drift"
-        temperature = scores.get("temperature_drift")
-        r = (time_correlation or {}).get("temperature", 0.0)
         # a column that follows time has shifted copies that follow time too: its surrogates
         # cannot tell it from a drift, which is the point of naming the confound
-        confounded = abs(r) >= CONFOUNDED_R
-        if temperature is not None and confounded and against_baseline(temperature, noise, surrogates=False) is None:
-            best = "temperature_drift"
+        confounded = [
+            c
+            for c in OBSERVED_CAUSES
+            if c in scores
+            and abs((time_correlation or {}).get(COLUMNS[c], 0.0)) >= CONFOUNDED_R
+            and against_baseline(scores[c], noise, surrogates=False) is None
+        ]
+        if confounded:
+            best = max(confounded, key=lambda c: scores[c].mean)
+            r = (time_correlation or {})[COLUMNS[best]]
             decided_by = "residual vs the measured column, confounded with time"
             note = (
-                f"; the temperature follows time too closely to tell the two apart (r = {r:+.2f}): a warming "
-                f"muscle or any other slow drift; record a cooling phase or hold the temperature to separate them"
+                f"; the {COLUMNS[best]} follows time too closely to tell the two apart (r = {r:+.2f}): "
+                f"{'a warming muscle' if best == 'temperature_drift' else 'a load that changes'} or any other "
+                f"slow drift; vary the {COLUMNS[best]} against time (a cooling phase, a load removed) "
+                "to separate them"
             )
     else:
         best = ranked[0] if ranked else CAUSES[0]

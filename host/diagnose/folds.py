@@ -27,7 +27,7 @@ def check_folds(folds: int, n: int, blocks_per_fold: int = BLOCKS_PER_FOLD) -> N
     if folds > most:
         raise DataError(
             f"--folds {folds}: {n} samples allow at most {most} folds of {blocks_per_fold} blocks of "
-            f"{MIN_BLOCK_SAMPLES}+ samples; use 2-{min(most, 10)} (default 4)"
+            f"{MIN_BLOCK_SAMPLES}+ samples; use 2-{most} (default 4)"
         )
 
 

@@ -42,7 +42,7 @@ from host.diagnose.candidates import (
     observed,
     shifted_copies,
 )
-from host.diagnose.decide import CandidateScore, choose, with_signatures
+from host.diagnose.decide import BLOWUP_RATIO, CandidateScore, choose, with_signatures
 from host.diagnose.evidence import baseline_evidence
 from host.diagnose.features import branch_offset, first_order, preisach_rows, smoothed_rate
 from host.diagnose.folds import BLOCKS_PER_FOLD, MIN_BLOCK_SAMPLES, check_folds, holdout_masks, noise_floor
@@ -97,6 +97,13 @@ class Diagnosis:
     notes: list[str]
 
     def as_json(self) -> dict[str, object]:
+        """The result as plain JSON values: non-finite numbers (a fold with no rows to judge, a
+        fit that failed) become null, so that any strict JSON parser reads it."""
+        fields = finite_or_null(self._fields())
+        assert isinstance(fields, dict)
+        return fields
+
+    def _fields(self) -> dict[str, object]:
         return {
             "cause": self.cause,
             "reason": self.reason,
@@ -113,6 +120,17 @@ class Diagnosis:
             "signatures": self.evidence.get("signatures", {}),
             "notes": self.notes,
         }
+
+
+def finite_or_null(value: object) -> object:
+    """``value`` with every non-finite float (nan, inf) replaced by None, recursively."""
+    if isinstance(value, dict):
+        return {k: finite_or_null(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [finite_or_null(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if np.isfinite(value) else None
+    return value
 
 
 def decimated(m: Measurement, limit: int = MAX_WORK_SAMPLES) -> tuple[Measurement, str | None]:
@@ -217,16 +235,27 @@ def diagnose(
         return _diagnose(m, folds, blocks_per_fold, levels, progress, notes)
 
 
+def _held_out_error(ctx: Context, d: Design, train: NDArray[np.bool_], rows: NDArray[np.bool_]) -> float:
+    """RMSE of ``d`` fitted on ``train`` on ``rows``; inf when the fit fails (a failed fit, not evidence)."""
+    try:
+        with np.errstate(all="ignore"):
+            return rmse(d.fit(ctx, train).prediction[rows], ctx.y[rows])
+    except (np.linalg.LinAlgError, ValueError):
+        return float("inf")
+
+
 def _fold_errors(
     ctx: Context, designs: dict[str, Design | None], held: NDArray[np.bool_]
-) -> dict[str, tuple[float, float] | None]:
+) -> dict[str, tuple[float, ...] | None]:
     """Per design, the held-out RMSE of the baseline and of the design on the rows the design can
-    be judged on (None: not available, or too few such rows)."""
+    be judged on (None: not available; nan: too few such rows). For each measured column also
+    ``"<cause>|slow_drift"``: the baseline's, the column's and the drift's errors on the rows
+    both can be judged on, so that the two are compared on the same rows."""
     train = ~held
     base_design = designs["baseline"]
     assert base_design is not None
     base = base_design.fit(ctx, train).prediction
-    out: dict[str, tuple[float, float] | None] = {}
+    out: dict[str, tuple[float, ...] | None] = {}
     for name, d in designs.items():
         if name == "baseline":
             continue
@@ -237,9 +266,19 @@ def _fold_errors(
         if rows.sum() < MIN_BLOCK_SAMPLES:
             out[name] = (np.nan, np.nan)
             continue
-        with np.errstate(all="ignore"):
-            prediction = d.fit(ctx, train).prediction
-        out[name] = (rmse(base[rows], ctx.y[rows]), rmse(prediction[rows], ctx.y[rows]))
+        out[name] = (rmse(base[rows], ctx.y[rows]), _held_out_error(ctx, d, train, rows))
+    drift = designs.get("slow_drift")
+    for cause in OBSERVED_CAUSES:
+        d = designs.get(cause)
+        if d is None or drift is None:
+            continue
+        rows = d.scored(train, held) & drift.scored(train, held)
+        if rows.sum() >= MIN_BLOCK_SAMPLES:
+            out[f"{cause}|slow_drift"] = (
+                rmse(base[rows], ctx.y[rows]),
+                _held_out_error(ctx, d, train, rows),
+                _held_out_error(ctx, drift, train, rows),
+            )
     return out
 
 
@@ -248,7 +287,9 @@ def _column_nulls(
 ) -> dict[str, list[float]]:
     """Mean held-out gains of each measured column's terms with the column replaced by shifted
     copies of itself (:func:`shifted_copies`): what a column of the same shape gains by chance
-    on this record, structural error and slow drifts included."""
+    on this record, structural error and slow drifts included. Each copy is scored by the
+    candidate's own rules (failed folds left out); a copy that is constant or whose fit fails on
+    more than one fold is drawn again."""
     rng = np.random.default_rng(0)
     out: dict[str, list[float]] = {}
     for cause in OBSERVED_CAUSES:
@@ -256,14 +297,19 @@ def _column_nulls(
         if designs.get(cause) is None or column is None:
             continue
         out[cause] = []
-        for values in shifted_copies(column, COLUMN_SURROGATES, rng):
-            surrogate = observed(ctx, cause, values)
-            gains = []
+        for _ in range(4 * COLUMN_SURROGATES):  # bounded redraws
+            if len(out[cause]) == COLUMN_SURROGATES:
+                break
+            surrogate = observed(ctx, cause, shifted_copies(column, 1, rng)[0])
+            if surrogate is None:
+                continue
+            score = CandidateScore(cause)
             for held in masks:
                 pair = _fold_errors(ctx, {"baseline": designs["baseline"], cause: surrogate}, held)[cause]
                 if pair is not None and np.isfinite(pair[0]):
-                    gains.append(1.0 - pair[1] / pair[0] if np.isfinite(pair[1]) else -np.inf)
-            out[cause].append(float(np.mean(gains)) if gains else 0.0)
+                    score.add(pair[0], pair[1])
+            if not score.failed and score.gains:
+                out[cause].append(score.mean)
     return out
 
 
@@ -307,9 +353,18 @@ def _diagnose(
             elif not np.isfinite(pair[0]):  # too few rows it can be judged on in this fold
                 scores[cause].all_gains.append(float("nan"))
             else:
-                scores[cause].add(*pair)
-                base_scores[cause].append(pair[0])
-                ext_scores[cause].append(pair[1])
+                scores[cause].add(pair[0], pair[1])
+                if np.isfinite(pair[1]):
+                    base_scores[cause].append(pair[0])
+                    ext_scores[cause].append(pair[1])
+        for cause in OBSERVED_CAUSES:
+            shared = errors.get(f"{cause}|slow_drift")
+            margin = None
+            if shared is not None:
+                base_rmse, column_rmse, drift_rmse = shared
+                if max(column_rmse, drift_rmse) <= BLOWUP_RATIO * base_rmse:  # both fits held
+                    margin = (drift_rmse - column_rmse) / base_rmse
+            scores[cause].drift_margins.append(margin)
     noise = noise_floor(ctx.y)
     time_correlation = {
         name: float(np.corrcoef(values, ctx.t)[0, 1]) for name, values in ctx.extras.items() if np.ptp(values) > 0
