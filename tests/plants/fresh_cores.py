@@ -228,7 +228,7 @@ RATE_INDEPENDENT = ("coleman_hodgdon", "kp_sum")
 
 
 def _muscle(rng: np.random.Generator, peak: float) -> dict[str, float]:
-    """The force-balance parameters the Duhem and relay cores share (drawn in this order)."""
+    """The force-balance parameters the Duhem, relay and chamber cores share (drawn in this order)."""
     return {
         "peak": peak,
         "stroke_mm": rng.uniform(35.0, 55.0),
@@ -270,11 +270,7 @@ def draw_fresh_params(core: str, rng: np.random.Generator, peak: float) -> dict[
         }
     if core == "pneumatic_chamber":
         return {
-            "peak": peak,
-            "stroke_mm": rng.uniform(35.0, 55.0),
-            "preload": rng.uniform(0.02, 0.06),
-            "f0_n": rng.uniform(500.0, 900.0),
-            "k": rng.uniform(0.4, 1.0),
+            **_muscle(rng, peak),
             "rate_fill": rng.uniform(8.0, 16.0),  # 1/s at full error
             "rate_vent": rng.uniform(6.0, 12.0),
             "fc": rng.uniform(0.03, 0.06),
