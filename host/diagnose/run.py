@@ -235,30 +235,32 @@ def diagnose(
         return _diagnose(m, folds, blocks_per_fold, levels, progress, notes)
 
 
-def _held_out_error(ctx: Context, d: Design, train: NDArray[np.bool_], rows: NDArray[np.bool_]) -> float:
-    """RMSE of ``d`` fitted on ``train`` on ``rows``; inf when the fit fails (a failed fit, not evidence)."""
+def _fold_prediction(ctx: Context, d: Design, train: NDArray[np.bool_]) -> NDArray[np.float64] | None:
+    """``d`` fitted on ``train`` and simulated over the record; None when the fit fails (a failed
+    fit, not evidence)."""
     try:
         with np.errstate(all="ignore"):
-            return rmse(d.fit(ctx, train).prediction[rows], ctx.y[rows])
+            return d.fit(ctx, train).prediction
     except (np.linalg.LinAlgError, ValueError):
-        return float("inf")
+        return None
+
+
+def _error(prediction: NDArray[np.float64] | None, y: NDArray[np.float64], rows: NDArray[np.bool_]) -> float:
+    return float("inf") if prediction is None else rmse(prediction[rows], y[rows])
 
 
 def _fold_errors(
-    ctx: Context, designs: dict[str, Design | None], held: NDArray[np.bool_]
+    ctx: Context, designs: dict[str, Design | None], held: NDArray[np.bool_], base: NDArray[np.float64]
 ) -> dict[str, tuple[float, ...] | None]:
-    """Per design, the held-out RMSE of the baseline and of the design on the rows the design can
-    be judged on (None: not available; nan: too few such rows). For each measured column also
-    ``"<cause>|slow_drift"``: the baseline's, the column's and the drift's errors on the rows
-    both can be judged on, so that the two are compared on the same rows."""
+    """Per design, the held-out RMSE of the baseline (``base``: its prediction fitted on this
+    fold's training rows) and of the design on the rows the design can be judged on (None: not
+    available; nan: too few such rows). For each measured column also ``"<cause>|slow_drift"``:
+    the baseline's, the column's and the drift's errors on the rows both can be judged on, so
+    that the two are compared on the same rows. Each design is fitted once per fold."""
     train = ~held
-    base_design = designs["baseline"]
-    assert base_design is not None
-    base = base_design.fit(ctx, train).prediction
+    predictions: dict[str, NDArray[np.float64] | None] = {}
     out: dict[str, tuple[float, ...] | None] = {}
     for name, d in designs.items():
-        if name == "baseline":
-            continue
         if d is None:
             out[name] = None
             continue
@@ -266,30 +268,34 @@ def _fold_errors(
         if rows.sum() < MIN_BLOCK_SAMPLES:
             out[name] = (np.nan, np.nan)
             continue
-        out[name] = (rmse(base[rows], ctx.y[rows]), _held_out_error(ctx, d, train, rows))
+        predictions[name] = _fold_prediction(ctx, d, train)
+        out[name] = (rmse(base[rows], ctx.y[rows]), _error(predictions[name], ctx.y, rows))
     drift = designs.get("slow_drift")
     for cause in OBSERVED_CAUSES:
         d = designs.get(cause)
-        if d is None or drift is None:
+        if d is None or drift is None or cause not in predictions or "slow_drift" not in predictions:
             continue
         rows = d.scored(train, held) & drift.scored(train, held)
         if rows.sum() >= MIN_BLOCK_SAMPLES:
             out[f"{cause}|slow_drift"] = (
                 rmse(base[rows], ctx.y[rows]),
-                _held_out_error(ctx, d, train, rows),
-                _held_out_error(ctx, drift, train, rows),
+                _error(predictions[cause], ctx.y, rows),
+                _error(predictions["slow_drift"], ctx.y, rows),
             )
     return out
 
 
 def _column_nulls(
-    ctx: Context, designs: dict[str, Design | None], masks: list[NDArray[np.bool_]]
+    ctx: Context,
+    designs: dict[str, Design | None],
+    masks: list[NDArray[np.bool_]],
+    base_folds: list[NDArray[np.float64]],
 ) -> dict[str, list[float]]:
     """Mean held-out gains of each measured column's terms with the column replaced by shifted
     copies of itself (:func:`shifted_copies`): what a column of the same shape gains by chance
     on this record, structural error and slow drifts included. Each copy is scored by the
     candidate's own rules (failed folds left out); a copy that is constant or whose fit fails on
-    more than one fold is drawn again."""
+    more than one fold is drawn again. ``base_folds``: the baseline's prediction per fold."""
     rng = np.random.default_rng(0)
     out: dict[str, list[float]] = {}
     for cause in OBSERVED_CAUSES:
@@ -304,8 +310,8 @@ def _column_nulls(
             if surrogate is None:
                 continue
             score = CandidateScore(cause)
-            for held in masks:
-                pair = _fold_errors(ctx, {"baseline": designs["baseline"], cause: surrogate}, held)[cause]
+            for held, base in zip(masks, base_folds):
+                pair = _fold_errors(ctx, {cause: surrogate}, held, base)[cause]
                 if pair is not None and np.isfinite(pair[0]):
                     score.add(pair[0], pair[1])
             if not score.failed and score.gains:
@@ -334,13 +340,15 @@ def _diagnose(
         delay_signature = found.get("transport_delay")
         ctx.joint_delay = delay_signature is not None and delay_signature.p_value <= JOINT_DELAY_P
         bar.update()
-        designs: dict[str, Design | None] = {"baseline": baseline(ctx, baseline_full)}
+        base_design = baseline(ctx, baseline_full)
+        designs: dict[str, Design | None] = {}
         for cause in CAUSES:
             with np.errstate(all="ignore"):
                 designs[cause] = design(ctx, cause)
             bar.update()
-        fold_errors = [_fold_errors(ctx, designs, held) for held in masks]
-        null_gains = _column_nulls(ctx, designs, masks)
+        base_folds = [base_design.fit(ctx, ~held).prediction for held in masks]
+        fold_errors = [_fold_errors(ctx, designs, held, base) for held, base in zip(masks, base_folds)]
+        null_gains = _column_nulls(ctx, designs, masks, base_folds)
         bar.update()
     scores = {c: CandidateScore(c, null_gains=null_gains.get(c, [])) for c in CAUSES}
     base_scores: dict[str, list[float]] = {c: [] for c in CAUSES}
