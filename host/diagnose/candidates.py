@@ -54,7 +54,6 @@ class Context:
     branch: NDArray[np.float64]  # play offset (threshold 10 % of the range), scaled to +-1
     extras: dict[str, NDArray[np.float64]]
     dt: float
-    train: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
     x: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     lag_s: float = 0.0  # the actuator lag of the baseline
     output_rate: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))

@@ -176,7 +176,6 @@ def cross_run(
     train, _ = decimated(train)
     ctx, _ = prepare(train, levels)
     ctx.lag_s = choose_actuator_lag(ctx)
-    ctx.train = np.ones(ctx.y.size, dtype=bool)
     model = fit_baseline(ctx)
     train_rmse = rmse(model.prediction, ctx.y)
     grid = EverettGrid(float(train.u.min()), float(train.u.max()), levels)

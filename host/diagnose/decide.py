@@ -92,10 +92,6 @@ class CandidateScore:
         return float(np.min(self.gains)) if self.gains else -np.inf
 
     @property
-    def threshold(self) -> float:
-        return GAIN_FLOOR
-
-    @property
     def failed(self) -> bool:
         return self.failed_folds > 1
 

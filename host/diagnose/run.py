@@ -190,18 +190,18 @@ def prepare(m: Measurement, levels: int) -> tuple[Context, int]:
 def choose_actuator_lag(ctx: Context) -> float:
     """The actuator lag whose baseline fits the whole record best (one discrete setting shared by
     every candidate, so choosing it on all rows favours no candidate)."""
-    ctx.train = np.ones(ctx.y.size, dtype=bool)
+    every = np.ones(ctx.y.size, dtype=bool)
     errors = {}
     for lag in ACTUATOR_LAGS_S:
-        model, _ = fit_hammerstein("baseline", ctx.lag_rows[lag], ctx.y, ctx.train, ctx.dt)
+        model, _ = fit_hammerstein("baseline", ctx.lag_rows[lag], ctx.y, every, ctx.dt)
         errors[lag] = rmse(model.prediction, ctx.y)
     return min(errors, key=lambda lag: errors[lag])
 
 
 def fit_baseline(ctx: Context) -> FittedModel:
     """The baseline on every row at ``ctx.lag_s``; sets ``ctx.x`` (the hysteresis output)."""
-    ctx.train = np.ones(ctx.y.size, dtype=bool)
-    model, ctx.x = fit_hammerstein("baseline", ctx.rows, ctx.y, ctx.train, ctx.dt)
+    every = np.ones(ctx.y.size, dtype=bool)
+    model, ctx.x = fit_hammerstein("baseline", ctx.rows, ctx.y, every, ctx.dt)
     ctx.ar = model.ar
     model.extra["actuator_lag_s"] = ctx.lag_s
     return model
