@@ -129,7 +129,7 @@ def against_baseline(s: CandidateScore, noise: float, surrogates: bool = True) -
         return f"its mean gain {s.mean:+.1%} is below {GAIN_FLOOR:.0%} (fold gains {_folds(s.gains)})"
     if s.worst < WORST_FOLD:
         return f"a fold contradicts it ({s.worst:+.1%}, worse than {WORST_FOLD:+.0%}; fold gains {_folds(s.gains)})"
-    if len(s.gains) > 1 and s.mean - float(np.std(s.gains, ddof=1)) / np.sqrt(len(s.gains)) <= 0:
+    if s.mean - float(np.std(s.gains, ddof=1)) / np.sqrt(len(s.gains)) <= 0:  # two or more folds here
         return f"the folds do not agree on it: the fold spread is as large as the mean (fold gains {_folds(s.gains)})"
     if float(np.mean(s.reductions)) < NOISE_SHARE * noise:
         return (
