@@ -206,6 +206,13 @@ def load_measurement(
             f"{path}: {bad.size} row(s) with NaN, inf or non-numbers in t/u/y (file lines {_line_list(lines, bad)}); "
             "remove or interpolate them"
         )
+    for name in (c for c in OPTIONAL if c in data):
+        holes = np.flatnonzero(~np.isfinite(data[name]))
+        if holes.size:  # a model fitted on this column would drop it or be poisoned by it, silently
+            raise DataError(
+                f"{path}: {holes.size} row(s) with NaN, inf or non-numbers in the {name!r} column (file lines "
+                f"{_line_list(lines, holes)}); interpolate or remove them, or delete the column if it was not measured"
+            )
     huge = np.flatnonzero(np.any(np.abs(table) > MAX_MAGNITUDE, axis=1))
     if huge.size:
         raise DataError(

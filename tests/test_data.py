@@ -40,6 +40,20 @@ def test_nan_rows_are_refused_with_their_line_numbers(tmp_path):
         load_measurement(write(tmp_path, text))
 
 
+def test_a_hole_in_a_load_or_temperature_column_is_refused_with_its_line(tmp_path):
+    body = [f"{i * 0.01:.2f},{i},{2 * i},0.5,{20 + i}" for i in range(20)]
+    body[11] = "0.11,11,22,nan,31"
+    with pytest.raises(DataError, match=r"1 row\(s\) with NaN.*'load' column \(file lines 13\).*delete the column"):
+        load_measurement(write(tmp_path, "t,u,y,load,temperature\n" + "\n".join(body)))
+
+
+def test_a_hole_in_an_unnamed_extra_column_is_kept(tmp_path):
+    body = [f"{i * 0.01:.2f},{i},{2 * i},{i % 3}" for i in range(20)]
+    body[4] = "0.04,4,8,"
+    m = load_measurement(write(tmp_path, "t,u,y,pwm_in\n" + "\n".join(body)))
+    assert np.isnan(m.extras["pwm_in"][4])
+
+
 def test_non_increasing_time_is_refused(tmp_path):
     text = "t,u,y\n0,1,1\n0.1,1,1\n0.1,2,2\n" + "\n".join(f"{0.2 + i / 10},1,1" for i in range(20))
     with pytest.raises(DataError, match="not strictly increasing at file line 4"):
