@@ -67,10 +67,16 @@ def muscle_contraction(p_bar: Array | float, weight_n: Array | float, k_n: Array
     return np.maximum((1.0 - s) / kap, 0.0)
 
 
-def _muscle_force(p_bar: float, e: float, g: dict[str, float]) -> float:
+def muscle_force(p_bar: float, e: float, g: dict[str, float]) -> float:
     """Chou-Hannaford force [N] at pressure ``p_bar`` and contraction ratio ``e``."""
     s = 1.0 - g["kappa"] * e
-    return p_bar * BAR_PA * np.pi * g["r0_m"] ** 2 * (3.0 * s * s / np.tan(g["theta0"]) ** 2 - 1.0 / np.sin(g["theta0"]) ** 2)
+    return (
+        p_bar
+        * BAR_PA
+        * np.pi
+        * g["r0_m"] ** 2
+        * (3.0 * s * s / np.tan(g["theta0"]) ** 2 - 1.0 / np.sin(g["theta0"]) ** 2)
+    )
 
 
 def lugre_mckibben(u: Array, dt_s: float, p: dict[str, float], hooks: Hooks) -> Array:
@@ -86,7 +92,9 @@ def lugre_mckibben(u: Array, dt_s: float, p: dict[str, float], hooks: Hooks) -> 
     s0, s1, s2, vs = p["sigma0"], p["sigma1"], p["sigma2"], p["vs_ms"]
     out = np.empty_like(u)
     prev = float(u[0])
-    for i, (ui, wi, li, ri) in enumerate(zip(u.tolist(), hooks.width.tolist(), hooks.load_kg.tolist(), hooks.rubber.tolist())):
+    for i, (ui, wi, li, ri) in enumerate(
+        zip(u.tolist(), hooks.width.tolist(), hooks.load_kg.tolist(), hooks.rubber.tolist())
+    ):
         mass = p["mass_kg"] + li
         k = p["k_spring"] + p["k_rubber"] * ri
         fc, fs = p["fc_n"] * wi, p["fs_n"] * wi
@@ -98,7 +106,7 @@ def lugre_mckibben(u: Array, dt_s: float, p: dict[str, float], hooks: Hooks) -> 
             z_new = zss + (z - zss) * math.exp(-s0 * abs(v) * h / gs)
             zdot = (z_new - z) / h
             z = z_new
-            force = _muscle_force(pb, x / p["l0_m"], p) - mass * G_MS2 - k * x - s0 * z - s1 * zdot - s2 * v
+            force = muscle_force(pb, x / p["l0_m"], p) - mass * G_MS2 - k * x - s0 * z - s1 * zdot - s2 * v
             v += h * force / mass
             x += h * v
             if x <= 0.0:
@@ -124,7 +132,9 @@ def _everett_tables(p: dict[str, float], n: int = 121) -> Array:
     mid, half = 0.5 * (alpha + beta), np.maximum(0.5 * (alpha - beta), 1e-9)
     out = np.empty((WIDTH_LEVELS.size, n, n))
     for k, w in enumerate(WIDTH_LEVELS.tolist()):
-        dens = np.exp(-0.5 * ((mid - p["mid"]) / p["mid_sd"]) ** 2 - 0.5 * (np.log(half / (w * p["half"])) / p["half_sd"]) ** 2)
+        dens = np.exp(
+            -0.5 * ((mid - p["mid"]) / p["mid_sd"]) ** 2 - 0.5 * (np.log(half / (w * p["half"])) / p["half_sd"]) ** 2
+        )
         dens = np.where(alpha > beta, dens / half, 0.0)
         out[k] = np.cumsum(np.cumsum(dens[:, ::-1], axis=1)[:, ::-1], axis=0)  # sum over b <= beta, alpha <= a
     return out / out[4, -1, 0]
@@ -321,84 +331,3 @@ BLIND_CORES: dict[str, Core] = {
     "asym_play_poly": asym_play_poly,
     "valve_chamber": valve_chamber,
 }
-
-
-def _geometry(rng: np.random.Generator, peak: float, kappa: float) -> dict[str, float]:
-    """Muscle geometry and a spring chosen so the nominal contraction at ``peak`` is 18-36 mm."""
-    g = {
-        "peak": peak,
-        "kappa": kappa,
-        "r0_m": rng.uniform(0.006, 0.010),  # 12-20 mm bore
-        "theta0": np.radians(rng.uniform(20.0, 26.0)),  # braid angle
-        "l0_m": rng.uniform(0.2, 0.3),
-        "payload_kg": rng.uniform(1.0, 3.0),
-    }
-    eps = rng.uniform(18.0, 36.0) / 1000.0 / g["l0_m"]
-    k_total = (_muscle_force(peak, eps, g) - g["payload_kg"] * G_MS2) / eps / g["l0_m"]  # N/m
-    rubber = rng.uniform(0.2, 0.4)
-    return {**g, "k_rubber": rubber * k_total, "k_spring": (1.0 - rubber) * k_total, "x_peak_m": eps * g["l0_m"]}
-
-
-def draw_blind_params(core: str, rng: np.random.Generator, peak: float) -> dict[str, float]:
-    """Plausible parameters for ``core`` (a 200-300 mm muscle, output span ~15-45 mm)."""
-    if core == "lugre_mckibben":
-        g = _geometry(rng, peak, 1.0)
-        fc = rng.uniform(0.05, 0.1) * (g["k_spring"] + g["k_rubber"]) * g["x_peak_m"]  # N
-        mass = rng.uniform(1.0, 2.5)
-        sigma0 = fc / rng.uniform(6e-4, 1.2e-3)  # N/m: presliding of 0.6-1.2 mm
-        return {
-            **g,
-            "mass_kg": mass,
-            "fc_n": fc,
-            "fs_n": fc * rng.uniform(1.05, 1.25),
-            "vs_ms": rng.uniform(0.001, 0.005),
-            "sigma0": sigma0,
-            "sigma1": math.sqrt(sigma0 * mass),  # N s/m: bristles damped at ~0.5
-            "sigma2": rng.uniform(300.0, 600.0),  # N s/m: the braid and rubber are lossy
-        }
-    if core == "preisach_resonant":
-        return {
-            **_geometry(rng, peak, rng.uniform(1.1, 1.3)),
-            "mid": rng.uniform(0.4, 0.6),
-            "mid_sd": rng.uniform(0.15, 0.3),
-            "half": rng.uniform(0.06, 0.14),
-            "half_sd": rng.uniform(0.4, 0.8),
-            "share": rng.uniform(0.4, 0.65),
-            "f_res_hz": rng.uniform(5.0, 20.0),
-            "zeta": rng.uniform(0.05, 0.2),
-        }
-    if core == "asym_play_poly":
-        a1, a2 = rng.uniform(0.5, 0.8), rng.uniform(0.2, 0.6)
-        a3 = -rng.uniform(0.0, 0.3) * (a1 + 2 * a2) / 3.0  # keeps f' > 0 on [0, 1]
-        total = a1 + a2 + a3
-        stroke = rng.uniform(25.0, 45.0)
-        return {
-            "peak": peak,
-            "stroke_mm": stroke,
-            "a1": a1 / total,
-            "a2": a2 / total,
-            "a3": a3 / total,
-            "r_up": rng.uniform(0.06, 0.12),
-            "r_down": rng.uniform(0.03, 0.08),
-            "c_plays": rng.uniform(0.4, 0.65),
-            "k0_n_mm": rng.uniform(3.0, 6.0),
-            "k1_n_mm": rng.uniform(6.0, 12.0),
-            "payload_kg": rng.uniform(1.0, 3.0),
-            "rubber_share": rng.uniform(0.2, 0.5),
-            "ymax_mm": stroke * rng.uniform(1.1, 1.3),
-        }
-    if core == "valve_chamber":
-        g = _geometry(rng, peak, 1.0)
-        vol = rng.uniform(1.0e-4, 2.5e-4)  # m^3: muscle plus tube
-        tau_fill = rng.uniform(0.2, 0.6)  # s to move most of the way at full error
-        m_fill = peak * BAR_PA * vol / (R_AIR * 293.15)
-        return {
-            **g,
-            "volume_m3": vol,
-            "orifice": m_fill / tau_fill * math.sqrt(R_AIR * 293.15) / (peak * BAR_PA + P_ATM),
-            "tau_th_s": rng.uniform(1.5, 5.0),
-            "slope": rng.uniform(3.0, 6.0),
-            "split": rng.uniform(0.06, 0.14),
-            "share": rng.uniform(0.4, 0.7),
-        }
-    raise KeyError(f"unknown blind core {core!r}; known: {', '.join(BLIND_CORES)}")
