@@ -181,8 +181,8 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
         }
     if form == "speed_threshold":  # width 1 + gain s / (s + s0), s = |u'|/peak [1/s]
         return {"gain": rng.uniform(0.5, 1.2), "s0": rng.uniform(0.05, 0.2)}
-    if form == "frequency_width":  # width 1 + gain ((f / 0.1 Hz)^beta - 1)+, f from reversal intervals
-        return {"gain": rng.uniform(0.15, 0.4), "beta": rng.uniform(0.3, 0.6)}
+    if form == "frequency_width":  # width (f / f_ref)^gain in [1/3, 3], f from reversal intervals [Hz]
+        return {"gain": rng.uniform(0.15, 0.35), "f_ref_hz": rng.uniform(0.03, 0.08)}
     if form == "tube_flow":  # dead time (1 + level_gain (1 - level)) (vent_ratio when venting)
         return {
             "dead_time_s": rng.uniform(0.03, 0.08),
@@ -253,7 +253,7 @@ def render(
         hooks = Hooks(1.0 + q["gain"] * s / (s + q["s0"]), hooks.load_kg, hooks.rubber)
     elif form == "frequency_width":
         f = lowpass(reversal_frequency(u, dt_s, 0.03 * peak), dt_s, 1.0)
-        hooks = Hooks(1.0 + q["gain"] * np.maximum((f / 0.1) ** q["beta"] - 1.0, 0.0), hooks.load_kg, hooks.rubber)
+        hooks = Hooks(np.clip((f / q["f_ref_hz"]) ** q["gain"], 1.0 / 3.0, 3.0), hooks.load_kg, hooks.rubber)
     elif form == "tube_flow":
         smooth = lowpass(u, dt_s, 0.05)
         venting = np.gradient(smooth, dt_s) < 0.0

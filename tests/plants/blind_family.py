@@ -112,7 +112,7 @@ def draw_blind_params(core: str, rng: np.random.Generator, peak: float) -> dict[
     if core == "valve_chamber":
         g = _geometry(rng, peak, 1.0)
         vol = rng.uniform(1.0e-4, 2.5e-4)  # m^3: muscle plus tube
-        tau_fill = rng.uniform(0.2, 0.6)  # s to move most of the way at full error
+        tau_fill = rng.uniform(0.1, 0.3)  # s to move most of the way at full error
         m_fill = peak * BAR_PA * vol / (R_AIR * 293.15)
         return {
             **g,
