@@ -142,3 +142,16 @@ def test_protocols_start_vented_stay_in_range_and_excite(protocol: str) -> None:
     u = vented_start(protocol, 60.0, dt, peak, np.random.default_rng(2))
     assert u.size == 3600 and np.all(np.isfinite(u)) and np.all(u[:120] == 0.0)
     assert u.min() >= 0.0 and u.max() <= peak and np.ptp(u[210:]) > 0.4 * peak
+
+
+@pytest.mark.slow
+def test_full_length_cases_keep_their_effects_visible_and_modest() -> None:
+    """The lead's records (150 s, the default): every effect in its band, every column moving."""
+    for case in blind_cases():
+        truth = simulate(case)["truth"]
+        assert 10.0 <= truth["span"] <= 50.0, case.name
+        if case.effect == "none":
+            assert truth["effect_size"] == 0.0
+        else:
+            low, high = EFFECT_MIN_OVER_NOISE * truth["noise"], EFFECT_MAX_OVER_SPAN * truth["span"]
+            assert low <= truth["effect_size"] <= high, case.name
