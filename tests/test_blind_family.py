@@ -155,3 +155,44 @@ def test_full_length_cases_keep_their_effects_visible_and_modest() -> None:
         else:
             low, high = EFFECT_MIN_OVER_NOISE * truth["noise"], EFFECT_MAX_OVER_SPAN * truth["span"]
             assert low <= truth["effect_size"] <= high, case.name
+
+
+def test_preisach_memory_matches_a_brute_force_plane_of_crisp_relays() -> None:
+    """The Everett/wiping-out shortcut equals switching every relay of the same grid one by one."""
+    from tests.plants.blind_cores import _everett_tables, preisach_share
+
+    rng = np.random.default_rng(3)
+    params = draw_blind_params("preisach_resonant", rng, 4.0)
+    table = _everett_tables(params)[4]  # the nominal spread
+    n = table.shape[0]
+    padded = np.zeros((n + 1, n + 1))
+    padded[1:, :n] = table  # padded[i + 1, j] = E(alpha_i, beta_j); zero outside the grid
+    weights = padded[1:, :n] - padded[:-1, :n] - padded[1:, 1:] + padded[:-1, 1:]  # relay (alpha_i, beta_j)
+    levels = np.clip(np.cumsum(rng.integers(-12, 13, 400)), 0, n - 1)
+    v = levels / (n - 1.0)
+    state = np.zeros((n, n), dtype=bool)
+    brute = np.empty(v.size)
+    for k, level in enumerate(levels.tolist()):
+        state[: level + 1, :] |= np.tri(n, n, -1, dtype=bool)[: level + 1, :]  # alpha_i <= v: on
+        state[:, level:] = False  # beta_j >= v: off
+        brute[k] = float(np.sum(weights[state]))
+    shortcut = preisach_share(v, np.ones(v.size), params)
+    assert np.max(np.abs(shortcut - brute)) < 1e-9
+    assert np.ptp(shortcut) > 0.3  # the walk really opened and wiped out loops
+
+
+def test_chamber_air_heats_on_filling_and_leaves_a_thermal_tail() -> None:
+    from tests.plants.blind_cores import chamber_pressure
+
+    rng = np.random.default_rng(4)
+    params = draw_blind_params("valve_chamber", rng, 4.0)
+    dt = 0.01
+    t = np.arange(int(20.0 / dt)) * dt
+    u = np.where((t > 1.0) & (t < 12.0), 4.0, 0.0)
+    hot = chamber_pressure(u, dt, params)
+    isothermal = chamber_pressure(u, dt, {**params, "tau_th_s": 0.05})
+    at = {s: int(round(s / dt)) for s in (1.1, 2.0, 11.9, 12.1, 14.0)}
+    assert hot[at[1.1]] > isothermal[at[1.1]] + 0.2  # adiabatic filling: the pressure rises faster
+    assert hot[at[11.9]] - hot[at[2.0]] > 0.003  # then sags as the air cools, the valve tops it up
+    assert hot[at[12.1]] < isothermal[at[12.1]] - 0.1  # venting cools the air: the pressure falls faster
+    assert hot[at[14.0]] > isothermal[at[14.0]] + 0.01  # and rewarming holds some back: a slow tail

@@ -243,40 +243,43 @@ R_AIR, GAMMA, P_ATM = 287.0, 1.4, 1.013e5
 
 
 def chamber_pressure(u: Array, dt_s: float, p: dict[str, float]) -> Array:
-    """Gauge pressure [bar] of a chamber of volume ``V`` fed from a regulator at ``u`` [bar gauge].
+    """Gauge pressure [bar] of a chamber of volume ``V`` behind a proportional 3/3 valve
+    commanded to ``u`` [bar gauge].
 
-    Orifice ``m' = C sign(d) |Pu^2 - Pd^2| / sqrt(R Tu (|Pu^2 - Pd^2| + eps))`` [kg/s] (laminar
-    near zero), energy ``m cv T' = m'_in (cp Ts - cv T) - m'_out R T - hA (T - Tw)`` with
-    ``hA = m_ref cv / tau_th`` (the air heats on filling and cools on venting, relaxing to the
-    wall in ``tau_th`` ~ 1.5-5 s); ``P = m R T / V``. Semi-implicit Euler at <= 1 ms, cached.
+    The valve opens ``min(1, |u - P| / band)`` of its orifice, from a 7 bar supply when ``P < u``
+    and to atmosphere when ``P > u``: ``m' = C open sqrt(|Pu^2 - Pd^2| / (R Tu))`` [kg/s].
+    Energy ``m cv T' = m'_in (cp Ts - cv T) - m'_out R T - hA (T - Tw)`` with
+    ``hA = m_ref cv / tau_th``: the air heats on filling and cools on venting and relaxes to the
+    wall in ``tau_th`` (1.5-5 s), so the pressure settles with a slow thermal tail;
+    ``P = m R T / V``. Euler at <= 1 ms (the wall exchange exact); cached for the on/off renders of a record.
     """
     key = hashlib.blake2b(u.tobytes() + np.array([dt_s, *p.values()]).tobytes(), digest_size=16).digest()
     if key in _CHAMBER_CACHE:
         return _CHAMBER_CACHE[key]
-    vol, cflow, t_wall = p["volume_m3"], p["orifice"], 293.15
+    vol, cflow, t_wall, band = p["volume_m3"], p["orifice"], 293.15, p["band_bar"] * BAR_PA
     cv = R_AIR / (GAMMA - 1.0)
     cp = cv + R_AIR
     m_ref = (P_ATM + 0.5 * p["peak"] * BAR_PA) * vol / (R_AIR * t_wall)
     ha = m_ref * cv / p["tau_th_s"]
+    supply = P_ATM + 7.0 * BAR_PA
     sub = max(1, int(np.ceil(dt_s / 0.001)))
     h = dt_s / sub
     temp, mass = t_wall, P_ATM * vol / (R_AIR * t_wall)
-    eps = (0.05 * BAR_PA) ** 2
     out = np.empty_like(u)
     for i, ui in enumerate(u.tolist()):
-        supply = P_ATM + ui * BAR_PA
+        target = P_ATM + ui * BAR_PA
         for _ in range(sub):
             pres = mass * R_AIR * temp / vol
-            d2 = supply * supply - pres * pres
-            if d2 >= 0.0:
-                flow = cflow * d2 / math.sqrt(R_AIR * t_wall * (d2 + eps))
+            opening = min(1.0, abs(target - pres) / band)
+            if pres < target:
+                flow = cflow * opening * math.sqrt(max(supply * supply - pres * pres, 0.0) / (R_AIR * t_wall))
                 heat = flow * (cp * t_wall - cv * temp)
             else:
-                flow = cflow * d2 / math.sqrt(R_AIR * temp * (-d2 + eps))
+                flow = -cflow * opening * math.sqrt(max(pres * pres - P_ATM * P_ATM, 0.0) / (R_AIR * temp))
                 heat = flow * R_AIR * temp
-            heat -= ha * (temp - t_wall)
             mass = max(mass + h * flow, 1e-9)
             temp += h * heat / (mass * cv)
+            temp = t_wall + (temp - t_wall) * math.exp(-h * ha / (mass * cv))  # wall exchange, exact
         out[i] = (mass * R_AIR * temp / vol - P_ATM) / BAR_PA
     _CHAMBER_CACHE.clear()  # keep one entry: on/off renders of one record share it
     _CHAMBER_CACHE[key] = out

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from host.data import Measurement
-from tests.plants.blind_cores import BAR_PA, BLIND_CORES, G_MS2, P_ATM, R_AIR, muscle_force
+from tests.plants.blind_cores import BAR_PA, BLIND_CORES, G_MS2, R_AIR, muscle_force
 from tests.plants.blind_effects import BLIND_FORMS, INTENSITY_KEY, columns, draw_effect_params, render
 from tests.plants.blind_protocols import BLIND_PROTOCOLS, vented_start
 from tests.plants.family import Case
@@ -112,12 +112,13 @@ def draw_blind_params(core: str, rng: np.random.Generator, peak: float) -> dict[
     if core == "valve_chamber":
         g = _geometry(rng, peak, 1.0)
         vol = rng.uniform(1.0e-4, 2.5e-4)  # m^3: muscle plus tube
-        tau_fill = rng.uniform(0.1, 0.3)  # s to move most of the way at full error
+        tau_fill = rng.uniform(0.15, 0.4)  # s to fill to peak at full opening
         m_fill = peak * BAR_PA * vol / (R_AIR * 293.15)
         return {
             **g,
             "volume_m3": vol,
-            "orifice": m_fill / tau_fill * math.sqrt(R_AIR * 293.15) / (peak * BAR_PA + P_ATM),
+            "orifice": m_fill / tau_fill * math.sqrt(R_AIR * 293.15) / (7.0 * BAR_PA),  # m^2 (C_d A / sqrt-law)
+            "band_bar": rng.uniform(0.4, 1.0),  # proportional band of the valve's pressure loop
             "tau_th_s": rng.uniform(1.5, 5.0),
             "slope": rng.uniform(3.0, 6.0),
             "split": rng.uniform(0.06, 0.14),
