@@ -18,9 +18,12 @@ The muscle statics are the McKibben balance of :func:`muscle_contraction` (Chou-
   a Tondu-Lopez balance, then a lightly damped second-order stage (5-20 Hz).
 * :func:`asym_play_poly`: asymmetric play operators (rising and falling thresholds differ), a
   cubic output map, load sag through a pressure-stiffened muscle, a soft saturation.
-* :func:`valve_chamber`: ``u`` is the supply regulator's command; an orifice fills and vents a
-  chamber whose air heats on filling and cools through the wall (thermal time constant 1.5-5 s);
-  the pressure drives scaled-branch (Madelung-rule) hysteresis and a Chou-Hannaford balance.
+* :func:`valve_chamber`: ``u`` is the command of a proportional valve that fills a chamber from
+  the supply and vents it to atmosphere; the air heats on filling and cools on venting and
+  relaxes to the wall (thermal time constant 1.5-5 s), which moves the pressure; the pressure
+  drives scaled-branch (Madelung-rule) hysteresis and a Chou-Hannaford balance.
+
+Plausible parameters are drawn by :func:`tests.plants.blind_family.draw_blind_params`.
 """
 
 from __future__ import annotations
@@ -192,9 +195,9 @@ def preisach_share(v: Array, width: Array, p: dict[str, float]) -> Array:
 
 
 def preisach_resonant(u: Array, dt_s: float, p: dict[str, float], hooks: Hooks) -> Array:
-    """Effective pressure ``u ((1 - s) + s P(u)/(u/peak))``-like: ``p_eff = peak ((1 - s) v + s P(v))``
-    with ``P`` the Preisach share, a Tondu-Lopez balance against payload and spring + rubber, then
-    ``y'' + 2 zeta wn y' + wn^2 y = wn^2 x`` (``wn = 2 pi f_res``, zero-order hold, at rest).
+    """Effective pressure ``p_eff = peak ((1 - s) v + s P(v))`` [bar] (``v = u / peak``, ``P`` the
+    Preisach share), a Tondu-Lopez balance against payload, spring and rubber giving ``x`` [mm],
+    then ``y'' + 2 zeta wn y' + wn^2 y = wn^2 x`` (``wn = 2 pi f_res``, zero-order hold, at rest).
     """
     v = np.clip(u / p["peak"], 0.0, 1.0)
     eff = p["peak"] * ((1.0 - p["share"]) * v + p["share"] * preisach_share(v, hooks.width, p))
