@@ -1,13 +1,15 @@
 """Scorecard of ``pmactl diagnose`` on the test plants: the tuning set and the fresh held-out set.
 
-Usage: python bench/diagnose_scorecard.py [--set tuning|fresh|both] [--duration S] [--only TEXT] [--json OUT]
+Usage: python bench/diagnose_scorecard.py [--set tuning|fresh|blind|both|all] [--duration S] [--only TEXT] [--json OUT]
 
 Prints one line per record (plant, effect:form, protocol, rate, verdict, confidence, held-out
 gain, CPU seconds) and a table per set: effects named / missed per plant and effect, false alarms
 on the effect-free records, median held-out gain when named, which evidence decided. The tuning
 set (tests/plants/family.py: Bouc-Wen, generalised play, friction-spring, HIL) is what the method
 and its constants were chosen on; the fresh set (tests/plants/fresh_family.py: four other cores,
-other effect forms, protocols and rates) was built separately and is only reported.
+other effect forms, protocols and rates) was built separately and is only reported. The blind
+set (tests/plants/blind_family.py: four more cores, forms, protocols and rates) was built without
+looking at the method, to be scored once. ``both`` is tuning + fresh; ``all`` adds the blind set.
 """
 
 from __future__ import annotations
@@ -27,10 +29,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from host.data import Measurement  # noqa: E402
 from host.diagnose.run import diagnose  # noqa: E402
+from tests.plants.blind_family import blind_cases, blind_measurement  # noqa: E402
 from tests.plants.family import Case, measurement, tuning_cases  # noqa: E402
 from tests.plants.fresh_family import fresh_cases, fresh_measurement  # noqa: E402
 
-SETS = {"tuning": (tuning_cases, measurement), "fresh": (fresh_cases, fresh_measurement)}
+SETS = {
+    "tuning": (tuning_cases, measurement),
+    "fresh": (fresh_cases, fresh_measurement),
+    "blind": (blind_cases, blind_measurement),
+}
 
 
 def score(
@@ -105,14 +112,14 @@ def table(title: str, rows: list[dict[str, object]]) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--set", choices=["tuning", "fresh", "both"], default="both")
+    parser.add_argument("--set", choices=["tuning", "fresh", "blind", "both", "all"], default="both")
     parser.add_argument("--duration", type=float, default=150.0, metavar="S")
     parser.add_argument("--only", help="run only cases whose name contains this text")
     parser.add_argument("--json", type=Path, help="write every row here")
     args = parser.parse_args(argv)
     results: dict[str, list[dict[str, object]]] = {}
     for name, (maker, record) in SETS.items():
-        if args.set in (name, "both"):
+        if args.set in (name, "all") or (args.set == "both" and name != "blind"):
             chosen = [c for c in maker(args.duration) if not args.only or args.only in c.name]
             results[name] = score(chosen, record)
     for name, rows in results.items():
