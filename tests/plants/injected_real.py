@@ -28,7 +28,6 @@ measured y) on the final grid; its intensity is solved to land on a target drawn
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,6 +38,17 @@ from numpy.typing import NDArray
 from scipy.signal import lfilter
 
 from host.data import Measurement
+from tests.plants.real_records import (
+    BASES,
+    BY_KEY,
+    PIEZO_BLOCK,
+    BaseRecord,
+    coarsen,
+    native_record,
+    noise_estimate,
+    record_paths,
+    resolution,
+)
 
 Array = NDArray[np.float64]
 FORMS: dict[str, tuple[str, ...]] = {
@@ -59,45 +69,26 @@ PHYSICAL_RANGE = {  # intensity bounds: creep at most half the drive, brief's de
 MIN_OVER_NOISE = 4.0  # the brief's floor; the target is raised to 5x to leave room
 MAX_OVER_SPAN = 0.12
 TARGET_OVER_SPAN = (0.03, 0.09)
-PIEZO_BLOCK = 10  # 10 kHz -> 1 kHz
 SEED_BASE = 9100
-
-
-@dataclass(frozen=True)
-class BaseRecord:
-    """One real record: files ``first..last`` (by name) of one folder, joined in name order."""
-
-    key: str
-    kind: str  # "piezo" or "muscle"
-    folder: str
-    first: str
-    last: str
-    tau_range_s: tuple[float, float]  # creep time constants
-    rate_lowpass_s: float  # low-pass of du/dt (quantised input)
-    min_delay_s: float  # the shortest transport delay injected
-
-
-def _piezo(name: str) -> BaseRecord:
-    return BaseRecord(name, "piezo", "piezo_dspace", f"{name}.csv", f"{name}.csv", (0.05, 2.0), 0.002, 0.0005)
-
-
-def _muscle(key: str, folder: str, first: str, last: str) -> BaseRecord:
-    return BaseRecord(key, "muscle", f"pam_muscle_sensory/{folder}", first, last, (1.0, 30.0), 0.1, 0.02)
-
-
-BASES = (
-    _piezo("20_hz_no_lp"),
-    _piezo("bigsine_1"),
-    _piezo("prbn_1"),
-    _piezo("sine100_1"),
-    _piezo("tri50_1"),
-    _muscle("18-03_S001-S007", "18-03-2026_Length_Characterisation", "S001P001.csv", "S007P003.csv"),
-    _muscle("31-03_S011-S019", "31-03-2026_Length_Characterisation", "S011P001.csv", "S019P003.csv"),
-    _muscle("07-17_all", "2026-07-17_Literature_Comparison", "S001P001.csv", "S012P002.csv"),
-    _muscle("07-21_all", "2026-07-21_Literature_Comparison", "S013P001.csv", "S015P002.csv"),
-    _muscle("07-22_all", "2026-07-22_Literature_Comparison", "S016P001.csv", "S021P002.csv"),
-)
-BY_KEY = {b.key: b for b in BASES}
+FORM_PARAMETERS = {  # what each form's truth reports besides its intensity
+    "kelvin_y": ("taus_s", "weights", "drive_reference"),
+    "kelvin_u": ("taus_s", "weights", "y_per_u", "drive_reference"),
+    "viscous": ("rate_lowpass_s", "direction"),
+    "rate_lag": ("rate_lowpass_s",),
+    "shift": (),
+    "compliance": ("direction",),
+    "offset": ("sign",),
+    "gain": ("sign", "y_ref"),
+}
+UNITS = {
+    "kelvin_y": "fraction of y",
+    "kelvin_u": "fraction of fitted y(u)",
+    "viscous": "span at the 99th-percentile rate",
+    "rate_lag": "s (lag at the 99th-percentile rate)",
+    "shift": "s (delay)",
+    "compliance": "y units per kg",
+    "offset": "y units per K",
+}
 
 
 @dataclass(frozen=True)
@@ -115,11 +106,6 @@ class InjectedCase:
         return f"{self.plant}/{self.base}/{self.effect}:{self.form}/s{self.seed}"
 
 
-def _paths(data_root: Path, base: BaseRecord) -> list[Path]:
-    folder = data_root / base.folder
-    return sorted(p for p in folder.glob("*.csv") if base.first <= p.name <= base.last)
-
-
 def injected_cases(data_root: Path) -> list[InjectedCase]:
     """Every base record found under ``data_root`` x (``none`` + one record per effect).
 
@@ -127,65 +113,11 @@ def injected_cases(data_root: Path) -> list[InjectedCase]:
     kinds of data."""
     out: list[InjectedCase] = []
     for i, base in enumerate(BASES):
-        if not _paths(Path(data_root), base):
+        if not record_paths(Path(data_root), base):
             continue
         for j, (effect, forms) in enumerate(FORMS.items()):
             out.append(InjectedCase(base.key, base.kind, effect, forms[i % len(forms)], SEED_BASE + 10 * i + j))
     return out
-
-
-@functools.lru_cache(maxsize=12)
-def _native(data_root: str, key: str) -> tuple[Array, Array, Array, tuple[str, ...]]:
-    """t [s] (continuous over joined logs), u, y on the files' own time base, and the file names."""
-    base = BY_KEY[key]
-    paths = _paths(Path(data_root), base)
-    if not paths:
-        raise FileNotFoundError(f"no files {base.first}..{base.last} in {Path(data_root) / base.folder}")
-    ts, us, ys = [], [], []
-    offset = 0.0
-    for path in paths:
-        with path.open() as handle:
-            header = [h.strip() for h in handle.readline().split(",")]
-        if header[:3] != ["t", "u", "y"]:
-            raise ValueError(f"{path}: expected columns t,u,y first, found {header}")
-        table = np.loadtxt(path, delimiter=",", skiprows=1, usecols=(0, 1, 2), ndmin=2)
-        jumps = np.abs(np.diff(table[:, 1]))
-        if jumps.size > 2 and jumps[-1] > 5.0 * jumps[:-1].max():
-            table = table[:-1]  # the dSPACE captures wrap round: the last sample is the first again
-        t = table[:, 0] - table[0, 0]
-        ts.append(t + offset)
-        offset = float(ts[-1][-1] + np.median(np.diff(t)))  # the next log starts one step later
-        us.append(table[:, 1])
-        ys.append(table[:, 2])
-    return np.concatenate(ts), np.concatenate(us), np.concatenate(ys), tuple(p.name for p in paths)
-
-
-def coarsen(kind: str, t: Array, x: Array) -> Array:
-    """The native-time signal ``x`` on the record's final uniform grid (a linear operation):
-    block means of :data:`PIEZO_BLOCK` samples for the piezo, linear interpolation onto the
-    median step for the muscle."""
-    if kind == "piezo":
-        n = x.size // PIEZO_BLOCK * PIEZO_BLOCK
-        return np.asarray(x[:n].reshape(-1, PIEZO_BLOCK).mean(axis=1), dtype=np.float64)
-    step = float(np.median(np.diff(t)))
-    grid = t[0] + step * np.arange(int(np.floor((t[-1] - t[0]) / step)) + 1)
-    return np.asarray(np.interp(grid, t, x), dtype=np.float64)
-
-
-def noise_estimate(y: Array, resolution: float) -> float:
-    """Output noise [y units]: the 10th percentile over windows of the RMS second difference / sqrt(6)
-    (white noise on the quietest stretches), floored at the quantisation noise resolution/sqrt(12)."""
-    e2 = np.diff(y, 2)
-    width = max(20, y.size // 50)
-    n = e2.size // width
-    rms = np.sqrt(np.mean(e2[: n * width].reshape(n, width) ** 2, axis=1))
-    return max(float(np.percentile(rms, 10)) / np.sqrt(6.0), resolution / np.sqrt(12.0))
-
-
-def _resolution(y: Array) -> float:
-    steps = np.abs(np.diff(y))
-    steps = steps[steps > 1e-12]
-    return float(np.percentile(steps, 5)) if steps.size else 0.0
 
 
 def lowpass(t: Array, x: Array, tau: float, start: float | None = None) -> Array:
@@ -253,7 +185,7 @@ def _unit_effect(
     direction = p["direction"]  # +1 when y rises with u: the sign a physical effect takes
     y_ref = p["y_ref"]
     if form in ("kelvin_y", "kelvin_u"):
-        drive = y - y[0] if form == "kelvin_y" else p["y_per_u"] * (u - u[0])
+        drive = y - p["drive_reference"] if form == "kelvin_y" else p["y_per_u"] * (u - p["drive_reference"])
         relax = sum(w * lowpass(t, drive, tau, 0.0) for w, tau in zip(p["weights"], p["taus_s"]))
         return lambda c: c * relax
     if form in ("viscous", "rate_lag"):
@@ -275,11 +207,12 @@ def _unit_effect(
 
 def _draw_params(case: InjectedCase, base: BaseRecord, rng: np.random.Generator) -> dict[str, Any]:
     lo, hi = np.log(base.tau_range_s[0]), np.log(base.tau_range_s[1])
-    edges = np.linspace(lo, hi, 4)
+    edges = np.linspace(lo, hi, 4)  # one time constant per third of the log range
+    weights = rng.uniform(0.5, 1.5, 3)
     return {
         "effect": case.effect,
         "taus_s": [float(np.exp(rng.uniform(a, b))) for a, b in zip(edges[:-1], edges[1:])],
-        "weights": (lambda w: [float(x) for x in w / w.sum()])(rng.uniform(0.5, 1.5, 3)),
+        "weights": [float(w) for w in weights / weights.sum()],
         "rate_lowpass_s": base.rate_lowpass_s,
         "sign": -1.0 if case.effect == "load_dependence" else float(rng.choice([-1.0, 1.0])),
         "target_over_span": float(rng.uniform(*TARGET_OVER_SPAN)),
@@ -328,7 +261,7 @@ def injected_measurement(case: InjectedCase, data_root: Path) -> tuple[Measureme
     effect, form, parameters (the solved intensity among them), effect size [y units], size over
     noise and over span, noise, span, column patterns, base files."""
     base = BY_KEY[case.base]
-    t, u, y, files = _native(str(data_root), case.base)
+    t, u, y, files = native_record(str(data_root), case.base)
     rng = np.random.default_rng(case.seed)
     cols: dict[str, Array] = {}
     patterns: dict[str, str] = {}
@@ -342,9 +275,10 @@ def injected_measurement(case: InjectedCase, data_root: Path) -> tuple[Measureme
     y_base = final(y)
     span = float(np.ptp(y_base))
     block = PIEZO_BLOCK if base.kind == "piezo" else 1
-    noise = noise_estimate(y_base, _resolution(y) / np.sqrt(block))
+    noise = noise_estimate(y_base, resolution(y) / np.sqrt(block))
     slope = float(np.polyfit(u, y, 1)[0])
     p.update(direction=float(np.sign(slope) or 1.0), y_ref=float(np.percentile(y, 2)), y_per_u=slope, span=span)
+    p["drive_reference"] = float(u[0] if case.form == "kelvin_u" else y[0])  # the state before the record
     parameters: dict[str, Any] = {}
     effect = np.zeros_like(y)
     if case.effect != "none":
@@ -353,22 +287,9 @@ def injected_measurement(case: InjectedCase, data_root: Path) -> tuple[Measureme
         target = float(np.clip(p["target_over_span"] * span, *window))
         intensity, clipped = _intensity(make, lambda e: _rms(final(e)), target, case.form, base, window)
         effect = make(intensity)
-        keys = {"kelvin_y": ("taus_s", "weights"), "kelvin_u": ("taus_s", "weights", "y_per_u")}
-        keys |= {"viscous": ("rate_lowpass_s", "direction"), "rate_lag": ("rate_lowpass_s",)}
-        keys |= {"compliance": ("direction",), "offset": ("sign",), "gain": ("sign", "y_ref")}
-        parameters = {k: p[k] for k in keys.get(case.form, ())}
-        parameters["intensity"] = intensity
-        parameters["intensity_held_to_physical_range"] = clipped
-        parameters["intensity_unit"] = {
-            "kelvin_y": "fraction of y",
-            "kelvin_u": "fraction of fitted y(u)",
-            "viscous": "span at the 99th-percentile rate",
-            "rate_lag": "s (lag at the 99th-percentile rate)",
-            "shift": "s (delay)",
-            "compliance": "y units per kg",
-            "offset": "y units per K",
-            "gain": "per kg" if case.effect == "load_dependence" else "per K",
-        }[case.form]
+        unit = UNITS[case.form] if case.form != "gain" else "per kg" if case.effect == "load_dependence" else "per K"
+        parameters = {k: p[k] for k in FORM_PARAMETERS[case.form]}
+        parameters |= {"intensity": intensity, "intensity_unit": unit, "intensity_held_to_physical_range": clipped}
     y_out = final(y + effect)
     size = _rms(y_out - y_base)
     noise_rng = np.random.default_rng(case.seed + 50_000)  # column sensor noise
