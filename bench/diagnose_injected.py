@@ -82,7 +82,7 @@ def score(cases: list[InjectedCase], data: Path) -> list[dict[str, Any]]:
         mark = "base" if case.effect == "none" else "ok" if d.cause == case.effect else "MISS"
         print(
             f"{mark:<5} {case.name:<58} -> {d.cause:<18} gain {d.gain:6.1%} "
-            f"margin {d.confidence['over_threshold']:+.3f} cpu {cpu:5.1f}s  ({d.decided_by})",
+            f"margin {d.confidence.get('over_threshold', float('nan')):+.3f} cpu {cpu:5.1f}s  ({d.decided_by})",
             flush=True,
         )
     return rows

@@ -317,4 +317,10 @@ def injected_measurement(case: InjectedCase, data_root: Path) -> tuple[Measureme
         "temperature_pattern": patterns["temperature"],
         "note": "nothing injected; the real rig may carry effects of its own" if case.effect == "none" else "",
     }
-    return Measurement(t_out - t_out[0], final(u), y_out, extras, source=case.name), truth
+    return Measurement(
+        t_out - t_out[0],
+        final(u),
+        y_out,
+        extras,
+        source=f"{base.kind}/{base.key} (injected-real set, record s{case.seed})",
+    ), truth
