@@ -8,6 +8,8 @@ well under a CPU second; skipped where ../shared/data is absent.
 
 from __future__ import annotations
 
+import importlib.util
+import json
 import warnings
 from functools import cache
 from pathlib import Path
@@ -18,6 +20,7 @@ import pytest
 from scipy.signal import lfilter
 
 from host.data import Measurement, load_measurement
+from tests.conftest import REPO
 from tests.plants.injected_real import FORMS, MAX_OVER_SPAN, MIN_OVER_NOISE, injected_cases, injected_measurement
 from tests.plants.real_records import BASES, PIEZO_BLOCK, native_record
 
@@ -162,3 +165,26 @@ def test_injected_minus_base_is_the_named_effect(shared_data: Path) -> None:
         allowed = 0.25 if truth["effect"] == "rate_dependence" else 0.15
         assert residual <= allowed, f"{name}: rebuilt effect off by {residual:.0%}"
         assert _rms(difference - expected * 0.5) > 0.3 * _rms(difference), name  # the check can fail
+
+
+def _bench() -> Any:
+    spec = importlib.util.spec_from_file_location("diagnose_injected", REPO / "bench" / "diagnose_injected.py")
+    assert spec and spec.loader
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_bench_dry_run_builds_and_reports_sizes(shared_data: Path, tmp_path: Path, capsys: Any) -> None:
+    out = tmp_path / "rows.json"
+    assert _bench().main(["--data", str(shared_data), "--only", "07-21", "--dry-run", "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert printed.count("| muscle/07-21_all/") == len(FORMS) and "6 records built in" in printed
+    rows = json.loads(out.read_text())
+    assert [r["effect"] for r in rows] == list(FORMS)
+
+
+def test_bench_refuses_missing_data_in_one_line(tmp_path: Path, capsys: Any) -> None:
+    assert _bench().main(["--data", str(tmp_path / "absent"), "--dry-run"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "pass --data" in err

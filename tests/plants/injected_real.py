@@ -125,26 +125,20 @@ def lowpass(t: Array, x: Array, tau: float, start: float | None = None) -> Array
     ``start`` (default ``x[0]``)."""
     s0 = float(x[0]) if start is None else start
     dts = np.diff(t)
-    if np.ptp(dts) <= 1e-9 * np.median(dts):  # uniform: a filter call
-        a = 1.0 - np.exp(-float(dts[0]) / tau)
-        out, _ = lfilter([a], [1.0, a - 1.0], x, zi=[(1.0 - a) * s0])
-        return np.asarray(out, dtype=np.float64)
-    alphas = 1.0 - np.exp(-np.concatenate([[dts[0]], dts]) / tau)
-    out = np.empty_like(x)
-    s = s0
-    for i, (a, v) in enumerate(zip(alphas.tolist(), x.tolist())):
-        s += a * (v - s)
-        out[i] = s
-    return out
+    if np.ptp(dts) > 1e-9 * np.median(dts):
+        return _lag(t, x, np.full(x.size, tau), s0)
+    a = 1.0 - np.exp(-float(dts[0]) / tau)  # uniform: one filter call
+    out, _ = lfilter([a], [1.0, a - 1.0], x, zi=[(1.0 - a) * s0])
+    return np.asarray(out, dtype=np.float64)
 
 
-def _varying_lag(t: Array, y: Array, tau: Array) -> Array:
-    """First-order lag of ``y`` whose time constant ``tau`` [s] changes sample by sample."""
-    dts = np.concatenate([[0.0], np.diff(t)])
+def _lag(t: Array, x: Array, tau: Array, start: float) -> Array:
+    """First-order lag of ``x`` whose time constant ``tau`` [s] may change sample by sample."""
+    dts = np.diff(t, prepend=2 * t[0] - t[1])
     alphas = (1.0 - np.exp(-dts / np.maximum(tau, 1e-12))).tolist()
-    out = np.empty_like(y)
-    s = float(y[0])
-    for i, (a, v) in enumerate(zip(alphas, y.tolist())):
+    out = np.empty_like(x)
+    s = start
+    for i, (a, v) in enumerate(zip(alphas, x.tolist())):
         s += a * (v - s)
         out[i] = s
     return out
@@ -193,7 +187,7 @@ def _unit_effect(
         rate = rate / max(float(np.percentile(np.abs(rate), 99)), 1e-12)  # robust to steps in u
         if form == "viscous":
             return lambda k: k * direction * p["span"] * rate
-        return lambda tau_ref: _varying_lag(t, y, tau_ref * np.minimum(np.abs(rate), 3.0)) - y
+        return lambda tau_ref: _lag(t, y, tau_ref * np.minimum(np.abs(rate), 3.0), float(y[0])) - y
     if form == "shift":
         return lambda d: np.interp(t - d, t, y, left=y[0]) - y
     column = cols["load"] if p["effect"] == "load_dependence" else cols["temperature"]
