@@ -72,6 +72,18 @@ def test_an_observed_cause_must_beat_a_slow_drift_of_the_same_flexibility():
     assert v.cause == "temperature_drift" and "slow drift" in v.decided_by
 
 
+def test_a_drift_that_shifted_copies_of_time_explain_as_well_is_not_named():
+    drift = [0.14, 0.16, 0.15, 0.13]
+    scores = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}
+    scores["slow_drift"] = scored("slow_drift", drift)
+    scores["slow_drift"].null_gains = [0.02, 0.05, 0.16, -0.1, 0.0, 0.03, 0.01, 0.04, 0.02]
+    v = choose(scores, 0.0)
+    assert v.cause == "none" and "shifted copies of the ramp in time" in v.reason
+    assert v.confidence["surrogate_p"] == {"slow_drift": pytest.approx(0.2)}
+    scores["slow_drift"].null_gains = [0.02, 0.05, 0.1, -0.1, 0.0, 0.03, 0.01, 0.04, 0.02]
+    assert choose(scores, 0.0).cause == "slow_drift"
+
+
 def test_the_drift_yardstick_ignores_folds_where_either_fit_failed_and_needs_two_folds():
     from host.diagnose.decide import why_not
 

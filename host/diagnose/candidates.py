@@ -11,8 +11,9 @@ jointly with its term; a fold then refits only the gains and the term's coeffici
   shares all have one sign (:func:`creep`);
 * ``transport_delay``: a dead time before the hysteresis (at least 3 samples);
 * ``load_dependence`` / ``temperature_drift``: the measured column shifts and bends the curve
-  and widens or narrows the loop (``v, v x, v x^2, v branch``);
-* ``slow_drift``: the same four terms with a ramp in time in place of a measured column: the
+  and widens or narrows the loop, and acts through a curved map of itself
+  (``v, v x, v x^2, v branch, v^2``);
+* ``slow_drift``: the same five terms with a ramp in time in place of a measured column: the
   drift no column explains, and the yardstick an observed cause must beat.
 """
 
@@ -266,11 +267,14 @@ def transport_delay(ctx: Context) -> Design | None:
     return _best_of([float(i) for i in range(len(pairs))], design, ctx)
 
 
-def _four_terms(ctx: Context, name: str, v: NDArray[np.float64], label: str) -> Design:
-    """``v, v x, v x^2, v branch`` in the ARX drive: the curve shifts and bends, the loop widens or narrows."""
+def _column_terms(ctx: Context, name: str, v: NDArray[np.float64], label: str) -> Design:
+    """``v, v x, v x^2, v branch, v^2`` in the ARX drive: the curve shifts and bends, the loop
+    widens or narrows, and the column acts through a curved map of itself (a load sags a muscle
+    more per kilogram as it grows; rubber softens faster as it warms): without ``v^2`` a curved
+    offset was left to whatever slow term came next (a creep, a drift)."""
     xn = _normalised(ctx.x)
-    columns = np.column_stack([v, v * xn, v * xn**2, v * ctx.branch])
-    model = _with_columns(ctx, name, columns, [label, f"{label}*x", f"{label}*x^2", f"{label}*branch"])
+    columns = np.column_stack([v, v * xn, v * xn**2, v * ctx.branch, v * v])
+    model = _with_columns(ctx, name, columns, [label, f"{label}*x", f"{label}*x^2", f"{label}*branch", f"{label}^2"])
     model.source = v
     return model
 
@@ -286,7 +290,7 @@ def observed(ctx: Context, cause: str, values: NDArray[np.float64] | None = None
         values = ctx.extras.get(column)
     if values is None or np.ptp(values) <= 0:
         return None
-    return _four_terms(ctx, cause, _normalised(values), column)
+    return _column_terms(ctx, cause, _normalised(values), column)
 
 
 def shifted_copies(values: NDArray[np.float64], count: int, rng: np.random.Generator) -> list[NDArray[np.float64]]:
@@ -303,12 +307,12 @@ def shifted_copies(values: NDArray[np.float64], count: int, rng: np.random.Gener
     return [np.roll(mirrored, int(share * n))[:n] for share in shares]
 
 
-def slow_drift(ctx: Context) -> Design:
-    """The four terms of a measured column with a plain ramp in time in its place: the same
-    flexibility (one given shape, four coefficients), so an observed cause has to explain more
+def slow_drift(ctx: Context, time: NDArray[np.float64] | None = None) -> Design:
+    """The five terms of a measured column with a plain ramp in time in its place: the same
+    flexibility (one given shape, five coefficients), so an observed cause has to explain more
     than time alone does. (Two or more free shapes of time would also fit whatever differs between
-    the parts of a protocol, which is no drift.)"""
-    return _four_terms(ctx, "slow_drift", _normalised(ctx.t), "time")
+    the parts of a protocol, which is no drift.) ``time``: a surrogate in place of the ramp."""
+    return _column_terms(ctx, "slow_drift", _normalised(ctx.t if time is None else time), "time")
 
 
 def design(ctx: Context, cause: str) -> Design | None:

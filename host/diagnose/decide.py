@@ -18,7 +18,9 @@ candidate can be judged on. A candidate passes when
   the same rows).
 
 ``slow_drift`` names a drift no column explains only when no physical cause passes: it is the
-yardstick, and a creep or a load effect that it also fits is the better explanation. When a
+yardstick, and a creep or a load effect that it also fits is the better explanation. It must
+then also beat shifted copies of its ramp in time (tents and kinked slopes: what a slowly
+changing structural error is fitted by as well), with the same p-value rule as a column. When a
 measured column follows time too closely to tell the two apart (|r| >= :data:`CONFOUNDED_R`)
 and both explain the drift, the verdict names the column's cause with that confound stated.
 
@@ -138,8 +140,9 @@ def against_baseline(s: CandidateScore, noise: float, surrogates: bool = True) -
         )
     p = s.surrogate_p
     if surrogates and p is not None and p > SURROGATE_ALPHA:
+        what = "the ramp in time" if s.cause == "slow_drift" else "its column"
         return (
-            f"shifted copies of its column gain as much on this record (mean gain {s.mean:+.1%} vs "
+            f"shifted copies of {what} gain as much on this record (mean gain {s.mean:+.1%} vs "
             f"surrogates up to {max(s.null_gains):+.1%}; surrogate p = {p:.2g})"
         )
     return None
@@ -242,7 +245,7 @@ def choose(
         "runner_up": runner,
         "threshold": GAIN_FLOOR,
         "noise_floor": noise,
-        "surrogate_p": {c: scores[c].surrogate_p for c in OBSERVED_CAUSES if c in scores and scores[c].null_gains},
+        "surrogate_p": {c: s.surrogate_p for c, s in scores.items() if s.null_gains},
     }
     if best in passing or decided_by.endswith("confounded with time"):
         reason = f"{best} lowers held-out RMSE by {s.mean:.1%} on average (fold gains {_folds(s.gains)}"

@@ -23,7 +23,9 @@ from __future__ import annotations
 
 import sys
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
@@ -41,8 +43,17 @@ from host.diagnose.candidates import (
     design,
     observed,
     shifted_copies,
+    slow_drift,
 )
-from host.diagnose.decide import BLOWUP_RATIO, CandidateScore, choose, with_signatures
+from host.diagnose.decide import (
+    BLOWUP_RATIO,
+    PHYSICAL_CAUSES,
+    CandidateScore,
+    against_baseline,
+    choose,
+    why_not,
+    with_signatures,
+)
 from host.diagnose.evidence import baseline_evidence
 from host.diagnose.features import branch_offset, first_order, preisach_rows, smoothed_rate
 from host.diagnose.folds import BLOCKS_PER_FOLD, MIN_BLOCK_SAMPLES, check_folds, holdout_masks, noise_floor
@@ -285,38 +296,60 @@ def _fold_errors(
     return out
 
 
+def _surrogate_gains(
+    ctx: Context,
+    cause: str,
+    column: NDArray[np.float64],
+    make: Callable[[NDArray[np.float64]], Design | None],
+    masks: list[NDArray[np.bool_]],
+    base_folds: list[NDArray[np.float64]],
+) -> list[float]:
+    """Mean held-out gains of ``cause``'s terms with ``column`` replaced by shifted copies of
+    itself (:func:`shifted_copies`; ``make`` builds the design from a copy): what a column of the
+    same shape gains by chance on this record, structural error and slow drifts included. Each
+    copy is scored by the candidate's own rules (failed folds left out); a copy that is constant
+    or whose fit fails on more than one fold is drawn again. ``base_folds``: the baseline's
+    prediction per fold."""
+    rng = np.random.default_rng(0)
+    out: list[float] = []
+    for _ in range(4 * COLUMN_SURROGATES):  # bounded redraws
+        if len(out) == COLUMN_SURROGATES:
+            break
+        surrogate = make(shifted_copies(column, 1, rng)[0])
+        if surrogate is None:
+            continue
+        score = CandidateScore(cause)
+        for held, base in zip(masks, base_folds):
+            pair = _fold_errors(ctx, {cause: surrogate}, held, base)[cause]
+            if pair is not None and np.isfinite(pair[0]):
+                score.add(pair[0], pair[1])
+        if not score.failed and score.gains:
+            out.append(score.mean)
+    return out
+
+
 def _column_nulls(
     ctx: Context,
     designs: dict[str, Design | None],
     masks: list[NDArray[np.bool_]],
     base_folds: list[NDArray[np.float64]],
 ) -> dict[str, list[float]]:
-    """Mean held-out gains of each measured column's terms with the column replaced by shifted
-    copies of itself (:func:`shifted_copies`): what a column of the same shape gains by chance
-    on this record, structural error and slow drifts included. Each copy is scored by the
-    candidate's own rules (failed folds left out); a copy that is constant or whose fit fails on
-    more than one fold is drawn again. ``base_folds``: the baseline's prediction per fold."""
-    rng = np.random.default_rng(0)
+    """Surrogate gains (:func:`_surrogate_gains`) of each measured column present."""
     out: dict[str, list[float]] = {}
     for cause in OBSERVED_CAUSES:
         column = ctx.extras.get(COLUMNS[cause])
-        if designs.get(cause) is None or column is None:
-            continue
-        out[cause] = []
-        for _ in range(4 * COLUMN_SURROGATES):  # bounded redraws
-            if len(out[cause]) == COLUMN_SURROGATES:
-                break
-            surrogate = observed(ctx, cause, shifted_copies(column, 1, rng)[0])
-            if surrogate is None:
-                continue
-            score = CandidateScore(cause)
-            for held, base in zip(masks, base_folds):
-                pair = _fold_errors(ctx, {cause: surrogate}, held, base)[cause]
-                if pair is not None and np.isfinite(pair[0]):
-                    score.add(pair[0], pair[1])
-            if not score.failed and score.gains:
-                out[cause].append(score.mean)
+        if designs.get(cause) is not None and column is not None:
+            out[cause] = _surrogate_gains(ctx, cause, column, partial(observed, ctx, cause), masks, base_folds)
     return out
+
+
+def _drift_null(ctx: Context, masks: list[NDArray[np.bool_]], base_folds: list[NDArray[np.float64]]) -> list[float]:
+    """Surrogate gains of ``slow_drift``: the ramp in time replaced by shifted mirrored copies of
+    itself (tents and slopes with a kink, placed at random). A structural error that changes
+    across a protocol (growing amplitudes, a level held longer at the end) is fitted by such
+    slow shapes of time as well as by the ramp; a drift is monotone in time and fits the ramp
+    better than most of them."""
+    return _surrogate_gains(ctx, "slow_drift", ctx.t, partial(slow_drift, ctx), masks, base_folds)
 
 
 def _diagnose(
@@ -374,6 +407,11 @@ def _diagnose(
                     margin = (drift_rmse - column_rmse) / base_rmse
             scores[cause].drift_margins.append(margin)
     noise = noise_floor(ctx.y)
+    drift = scores["slow_drift"]
+    if against_baseline(drift, noise) is None and not any(
+        why_not(scores[c], noise, drift) is None for c in PHYSICAL_CAUSES
+    ):  # the drift would be named: only then is its surrogate null worth its cost
+        drift.null_gains = _drift_null(ctx, masks, base_folds)
     time_correlation = {
         name: float(np.corrcoef(values, ctx.t)[0, 1]) for name, values in ctx.extras.items() if np.ptp(values) > 0
     }
@@ -433,12 +471,14 @@ TERMS = {
     "rate_dependence": "rate dependence: velocity-squared friction (y trails the rate-independent output by "
     "alpha v|v|, form 0) or a rate-dependent hysteresis weight (loop width and stroke scaled by the input "
     "speed, form 1)",
-    "creep": "creep operator: first-order relaxation of the hysteresis output, y gets e*(lowpass(x, tau) - x)",
+    "creep": "creep spectrum: first-order relaxations of the hysteresis output at 1-64 s, shares of one sign, "
+    "y gets sum e_i*(lowpass(x, tau_i) - x)",
     "transport_delay": "dead time before the hysteresis: x(k - d)",
-    "load_dependence": "load terms: y gets e1*L + e2*L*x + e3*L*x^2 (curve) + e4*L*branch (loop width)",
-    "temperature_drift": "temperature terms: y gets e1*T + e2*T*x + e3*T*x^2 (curve) + e4*T*branch (loop width)",
+    "load_dependence": "load terms: y gets e1*L + e2*L*x + e3*L*x^2 (curve) + e4*L*branch (loop width) + e5*L^2",
+    "temperature_drift": "temperature terms: y gets e1*T + e2*T*x + e3*T*x^2 (curve) + e4*T*branch (loop width) "
+    "+ e5*T^2",
     "slow_drift": "slow drift in time no column explains: y gets e1*t + e2*t*x + e3*t*x^2 (curve) + e4*t*branch "
-    "(loop width)",
+    "(loop width) + e5*t^2",
 }
 
 
