@@ -26,6 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from edge.errors import DataError  # noqa: E402
 from tests.plants.injected_real import InjectedCase, injected_cases, injected_measurement  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
@@ -59,9 +60,30 @@ def score(cases: list[InjectedCase], data: Path) -> list[dict[str, Any]]:
     for case in cases:
         m, truth = injected_measurement(case, data)
         start = time.process_time()
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            d = diagnose(m, progress=False)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                d = diagnose(m, progress=False)
+        except DataError as refusal:  # a record the method refuses (one line) is a miss, not a crash
+            print(f"{'REFUSED':<7} {case.name:<58} -> {refusal}", flush=True)
+            rows.append(
+                {
+                    "case": case.name,
+                    "kind": case.plant,
+                    "base": case.base,
+                    "effect": case.effect,
+                    "form": case.form,
+                    "verdict": "refused",
+                    "refusal": str(refusal),
+                    "gain": 0.0,
+                    "cpu_s": time.process_time() - start,
+                    "samples": len(m),
+                    "decided_by": "refused",
+                    "size_over_noise": truth["effect_size_over_noise"],
+                    "size_over_span": truth["effect_size_over_span"],
+                }
+            )
+            continue
         cpu = time.process_time() - start
         row = {
             "case": case.name,
@@ -106,7 +128,8 @@ def table(rows: list[dict[str, Any]]) -> None:
     named = [r for r in injected if r["verdict"] == r["effect"]]
     cpu = [r["cpu_s"] for r in rows]
     print(
-        f"\nnamed {len(named)}/{len(injected)} ({len(named) / max(1, len(injected)):.0%}); "
+        f"\nnamed {len(named)}/{len(injected)} ({len(named) / max(1, len(injected)):.0%}; refused "
+        f"{sum(r['verdict'] == 'refused' for r in injected)}); "
         f"CPU median {np.median(cpu):.1f} s, max {max(cpu):.1f} s"
     )
     for r in injected:
