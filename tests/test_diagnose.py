@@ -121,6 +121,15 @@ def test_observed_causes_do_not_win_by_rank_against_a_stronger_dynamic_cause():
     assert v.cause == "creep"
 
 
+def test_a_rate_term_that_a_linear_lag_explains_as_well_is_not_rate_dependence():
+    rate = [0.18, 0.20, 0.17, 0.19]
+    v = verdict(rate_dependence=rate, output_lag=[0.17, 0.19, 0.16, 0.18])
+    assert v.cause == "none" and "linear lag after the hysteresis explains as much" in v.reason
+    assert "baseline's dynamics are incomplete" in v.reason  # the lag itself is reported, not named
+    assert verdict(rate_dependence=rate, output_lag=[0.10, 0.11, 0.09, 0.12]).cause == "rate_dependence"
+    assert verdict(output_lag=[0.30, 0.31, 0.29, 0.30]).cause == "none"  # a yardstick is never the verdict
+
+
 def test_a_speed_dependent_lag_that_ties_a_dead_time_is_read_as_rate_dependence():
     tie = verdict(transport_delay=[0.40, 0.42, 0.41, 0.40], rate_dependence=[0.38, 0.40, 0.39, 0.37])
     assert tie.cause == "rate_dependence" and "vanishes when the output stops" in tie.decided_by

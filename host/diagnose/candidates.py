@@ -26,10 +26,20 @@ from functools import partial
 import numpy as np
 from numpy.typing import NDArray
 
-from host.diagnose.features import slow_part, velocity_squared_lag
+from host.diagnose.features import first_order, slow_part, velocity_squared_lag
 from host.diagnose.hammerstein import FittedModel, fit_gains, fit_hammerstein, rmse
 
-CAUSES = ("rate_dependence", "creep", "transport_delay", "load_dependence", "temperature_drift", "slow_drift")
+CAUSES = (
+    "rate_dependence",
+    "creep",
+    "transport_delay",
+    "load_dependence",
+    "temperature_drift",
+    "slow_drift",
+    "output_lag",
+)
+# not causes but yardsticks: what a physical cause must explain more than (never named)
+YARDSTICKS = ("slow_drift", "output_lag")
 OBSERVED_CAUSES = ("load_dependence", "temperature_drift")
 CREEP_TAUS_S = (2.0, 5.0, 10.0, 20.0, 40.0, 80.0)  # cross-run diagnosis: one time constant
 CREEP_SPECTRUM_S = (1.0, 4.0, 16.0, 64.0)
@@ -202,6 +212,23 @@ def rate_dependence(ctx: Context) -> Design:
     return min((friction, weight), key=lambda d: _training_error(d.fit(ctx, every), ctx))
 
 
+OUTPUT_LAGS_S = (0.01, 0.02, 0.05, 0.1, 0.2)
+
+
+def output_lag(ctx: Context) -> Design:
+    """A first-order lag after the hysteresis (the mechanics between the muscle and the sensor),
+    the hysteresis refitted with it: ``y = lag(rows @ E)`` is linear in the masses, so the rows
+    are filtered once per grid value. A speed-dependent term (velocity-squared friction, a loop
+    width growing with speed) also fits such a lag; it has to explain more than this does."""
+
+    def design(tau_s: float, iterations: int) -> Design:
+        rows = first_order(ctx.rows.astype(np.float64), ctx.dt, tau_s).astype(np.float32)
+        x, ar = _hysteresis(ctx, rows, ctx.y, iterations)
+        return Design("output_lag", x, _empty(ctx.y.size), [], ar, extra={"output_lag_s": tau_s})
+
+    return _best_of(OUTPUT_LAGS_S, design, ctx)
+
+
 def _creep_spectrum(ctx: Context, sign: float) -> Design:
     """The relaxations of :func:`creep` whose shares all have ``sign``: a time constant whose
     share comes out with the other sign is dropped and the rest refitted (an active-set fit)."""
@@ -328,4 +355,6 @@ def design(ctx: Context, cause: str) -> Design | None:
         return transport_delay(ctx)
     if cause == "slow_drift":
         return slow_drift(ctx)
+    if cause == "output_lag":
+        return output_lag(ctx)
     return observed(ctx, cause)

@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from host.diagnose.candidates import CAUSES, COLUMNS, OBSERVED_CAUSES
+from host.diagnose.candidates import CAUSES, COLUMNS, OBSERVED_CAUSES, YARDSTICKS
 from host.diagnose.signatures import Signature
 
 GAIN_FLOOR = 0.08
@@ -53,7 +53,9 @@ RIVAL_MARGIN = 0.05
 SURROGATE_ALPHA = 0.1
 DRIFT_MARGIN = 0.03
 CONFOUNDED_R = 0.9
-PHYSICAL_CAUSES = tuple(c for c in CAUSES if c != "slow_drift")
+PHYSICAL_CAUSES = tuple(c for c in CAUSES if c not in YARDSTICKS)
+# a speed-dependent term must gain this much more than a linear lag after the hysteresis
+LAG_MARGIN = 0.03
 
 
 @dataclass
@@ -167,11 +169,27 @@ def against_drift(s: CandidateScore, drift: CandidateScore) -> str | None:
     return None
 
 
-def why_not(s: CandidateScore, noise: float, drift: CandidateScore | None) -> str | None:
+def against_lag(s: CandidateScore, lag: CandidateScore) -> str | None:
+    """None when a speed-dependent term explains more than a linear lag after the hysteresis by
+    :data:`LAG_MARGIN`: a loop width growing in proportion to speed *is* a first-order lag in
+    the small, so only what a linear lag cannot do is evidence of rate dependence."""
+    if lag.gains and s.mean - lag.mean < LAG_MARGIN:
+        return (
+            f"a linear lag after the hysteresis explains as much ({lag.mean:+.1%} vs {s.mean:+.1%}, "
+            f"{LAG_MARGIN:.0%} more needed): the baseline lacks dynamics, not rate dependence"
+        )
+    return None
+
+
+def why_not(
+    s: CandidateScore, noise: float, drift: CandidateScore | None, lag: CandidateScore | None = None
+) -> str | None:
     """None when ``s`` passes, else the reason it does not."""
     reason = against_baseline(s, noise)
     if reason is None and s.cause in OBSERVED_CAUSES and drift is not None and drift.gains:
         reason = against_drift(s, drift)
+    if reason is None and s.cause == "rate_dependence" and lag is not None:
+        reason = against_lag(s, lag)
     return reason
 
 
@@ -181,10 +199,13 @@ def choose(
     """The verdict over every candidate's fold record (see the module docstring).
     ``time_correlation``: each measured column's correlation with time over the record."""
     drift = scores.get("slow_drift")
-    reasons = {c: why_not(s, noise, drift) for c, s in scores.items()}
-    passing = [c for c in CAUSES if c in scores and reasons[c] is None]
+    reasons = {c: why_not(s, noise, drift, scores.get("output_lag")) for c, s in scores.items()}
+    # the lag after the hysteresis is the baseline's missing dynamics: a yardstick, never a verdict
+    passing = [c for c in CAUSES if c in scores and reasons[c] is None and c != "output_lag"]
     physical = [c for c in passing if c in PHYSICAL_CAUSES]
-    ranked = sorted((c for c in scores if scores[c].available), key=lambda c: scores[c].mean, reverse=True)
+    ranked = sorted(
+        (c for c in scores if scores[c].available and c != "output_lag"), key=lambda c: scores[c].mean, reverse=True
+    )
     decided_by = "held-out gain"
     note = ""
     if physical:
@@ -255,6 +276,12 @@ def choose(
         return Verdict(best, reason + note, decided_by, confidence, passing)
     why = reasons[best] or "it does not pass"
     reason = f"no extension improves held-out error convincingly: the best ({best}) does not count because {why}"
+    lag = scores.get("output_lag")
+    if lag is not None and reasons.get("output_lag") is None:
+        reason += (
+            f"; a linear lag after the hysteresis gains {lag.mean:+.1%}: the baseline's dynamics are incomplete "
+            "(mechanics between the muscle and the sensor), which is none of the effects"
+        )
     return Verdict("none", reason, "no candidate passed", confidence, passing)
 
 

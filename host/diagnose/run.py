@@ -409,7 +409,7 @@ def _diagnose(
     noise = noise_floor(ctx.y)
     drift = scores["slow_drift"]
     if against_baseline(drift, noise) is None and not any(
-        why_not(scores[c], noise, drift) is None for c in PHYSICAL_CAUSES
+        why_not(scores[c], noise, drift, scores["output_lag"]) is None for c in PHYSICAL_CAUSES
     ):  # the drift would be named: only then is its surrogate null worth its cost
         drift.null_gains = _drift_null(ctx, masks, base_folds)
     time_correlation = {
@@ -477,6 +477,7 @@ TERMS = {
     "load_dependence": "load terms: y gets e1*L + e2*L*x + e3*L*x^2 (curve) + e4*L*branch (loop width) + e5*L^2",
     "temperature_drift": "temperature terms: y gets e1*T + e2*T*x + e3*T*x^2 (curve) + e4*T*branch (loop width) "
     "+ e5*T^2",
+    "output_lag": "first-order lag after the hysteresis: y gets lag(x, tau)",
     "slow_drift": "slow drift in time no column explains: y gets e1*t + e2*t*x + e3*t*x^2 (curve) + e4*t*branch "
     "(loop width) + e5*t^2",
 }
