@@ -83,7 +83,9 @@ def test_case_is_finite_visible_modest_and_has_moving_columns(case: family.Case)
     assert size == pytest.approx(truth["effect_size"])
     if case.effect == "none":
         core, params = BLIND_CORES[case.plant], truth["plant_parameters"]
-        again = render(core, params, sim["u"], 1.0 / case.rate_hz, "none", {}, sim["load"], sim["temperature"], None)
+        # the columns are decoys: the record is the same with them held still
+        still_load, still_temperature = np.full_like(sim["load"], 2.0), np.full_like(sim["temperature"], 22.0)
+        again = render(core, params, sim["u"], 1.0 / case.rate_hz, "none", {}, still_load, still_temperature, None)
         assert size == 0.0 and np.array_equal(again, sim["on"])
         return
     assert EFFECT_MIN_OVER_NOISE * truth["noise"] <= size <= EFFECT_MAX_OVER_SPAN * truth["span"]

@@ -47,6 +47,13 @@ def test_a_hole_in_a_load_or_temperature_column_is_refused_with_its_line(tmp_pat
         load_measurement(write(tmp_path, "t,u,y,load,temperature\n" + "\n".join(body)))
 
 
+def test_a_hole_in_the_pressure_column_is_refused_too(tmp_path):
+    body = [f"{i * 0.01:.2f},{i},{2 * i},{1 + i / 10}" for i in range(20)]
+    body[3] = "0.03,3,6,inf"
+    with pytest.raises(DataError, match=r"'p' column \(file lines 5\)"):
+        load_measurement(write(tmp_path, "t,u,y,p\n" + "\n".join(body)))
+
+
 def test_a_hole_in_an_unnamed_extra_column_is_kept(tmp_path):
     body = [f"{i * 0.01:.2f},{i},{2 * i},{i % 3}" for i in range(20)]
     body[4] = "0.04,4,8,"

@@ -78,10 +78,21 @@ def test_a_drift_that_shifted_copies_of_time_explain_as_well_is_not_named():
     scores["slow_drift"] = scored("slow_drift", drift)
     scores["slow_drift"].null_gains = [0.02, 0.05, 0.16, -0.1, 0.0, 0.03, 0.01, 0.04, 0.02]
     v = choose(scores, 0.0)
-    assert v.cause == "none" and "shifted copies of the ramp in time" in v.reason
+    assert v.cause == "none" and "every shifted copy of the ramp in time" in v.reason
     assert v.confidence["surrogate_p"] == {"slow_drift": pytest.approx(0.2)}
     scores["slow_drift"].null_gains = [0.02, 0.05, 0.1, -0.1, 0.0, 0.03, 0.01, 0.04, 0.02]
     assert choose(scores, 0.0).cause == "slow_drift"
+
+
+def test_the_drift_null_is_asked_for_only_when_the_drift_would_be_named():
+    from host.diagnose.decide import drift_would_be_named
+
+    scores = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}
+    assert not drift_would_be_named(scores, 0.0)  # the drift does not pass
+    scores["slow_drift"] = scored("slow_drift", [0.14, 0.16, 0.15, 0.13])
+    assert drift_would_be_named(scores, 0.0)
+    scores["creep"] = scored("creep", [0.30, 0.28, 0.31, 0.29])  # a physical cause passes: it wins
+    assert not drift_would_be_named(scores, 0.0) and choose(scores, 0.0).cause == "creep"
 
 
 def test_the_drift_yardstick_ignores_folds_where_either_fit_failed_and_needs_two_folds():

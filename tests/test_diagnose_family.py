@@ -1,8 +1,11 @@
 """The plant-family scorecards (slow): effects named on the tuning plants and on plants never tuned on.
 
 ``tests/plants/family.py`` holds the tuning plants (Bouc-Wen, generalised play, friction +
-spring, the HIL); ``tests/plants/fresh_family.py`` the held-out ones (four other cores, other
-effect forms, protocols and rates), built separately and only reported. The targets are the
+spring, the HIL); ``tests/plants/fresh_family.py`` the first held-out set (four other cores, other
+effect forms, protocols and rates), built separately; its verdicts were read while the method
+was changed after v4, so it is no longer blind. ``tests/plants/blind_family.py`` is the third set
+(four more cores, new forms, protocols and rates), built blind and scored only before and after
+that change, never to choose between variants. The targets are the
 issue's, on the held-out set: at least 90 % of the effects named, at most 1 false alarm in 10
 effect-free records. ``python bench/diagnose_scorecard.py`` prints the same tables with every verdict.
 """
@@ -16,12 +19,14 @@ import pytest
 
 from host.data import Measurement
 from host.diagnose.run import diagnose
+from tests.plants.blind_family import blind_cases, blind_measurement
 from tests.plants.family import Case, measurement, tuning_cases
 from tests.plants.fresh_family import fresh_cases, fresh_measurement
 
 # the measured scorecards (bench/diagnose_scorecard.py --duration 100): named effects, false alarms
-FRESH_NAMED, FRESH_EFFECTS, FRESH_ALARMS, FRESH_NONE = 18, 40, 5, 20
-TUNING_NAMED, TUNING_ALARMS = 16, 1
+FRESH_NAMED, FRESH_EFFECTS, FRESH_ALARMS, FRESH_NONE = 18, 40, 2, 20
+TUNING_NAMED, TUNING_ALARMS = 17, 1
+BLIND_NAMED, BLIND_EFFECTS, BLIND_ALARMS, BLIND_NONE = 9, 40, 5, 20
 
 
 def _verdicts(
@@ -46,6 +51,11 @@ def tuning_verdicts() -> list[tuple[str, str]]:
     return _verdicts(tuning_cases(100.0), measurement)
 
 
+@pytest.fixture(scope="module")
+def blind_verdicts() -> list[tuple[str, str]]:
+    return _verdicts(blind_cases(100.0), blind_measurement)
+
+
 def named_and_alarms(verdicts: list[tuple[str, str]]) -> tuple[int, int]:
     named = sum(truth == verdict for truth, verdict in verdicts if truth != "none")
     alarms = sum(verdict != "none" for truth, verdict in verdicts if truth == "none")
@@ -64,23 +74,33 @@ def test_at_least_90_percent_of_held_out_effects_are_named(verdicts):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason=f"below target: {FRESH_ALARMS}/{FRESH_NONE} false alarms on held-out plants (bench/diagnose_scorecard.py)",
-)
 def test_at_most_one_false_alarm_in_ten_effect_free_held_out_records(verdicts):
+    """Met on the fresh set since the changes after v4 (2/20), but those changes were judged on
+    it: the blind set's false alarms are in :func:`test_the_targets_hold_on_the_blind_plants`."""
     alarms = [verdict for truth, verdict in verdicts if truth == "none" and verdict != "none"]
     assert len(alarms) <= len([1 for truth, _ in verdicts if truth == "none"]) / 10, alarms
 
 
 @pytest.mark.slow
-def test_the_scorecards_do_not_fall_below_the_recorded_numbers(verdicts, tuning_verdicts):
+@pytest.mark.xfail(
+    strict=True,
+    reason=f"below target: {BLIND_NAMED}/{BLIND_EFFECTS} named, {BLIND_ALARMS}/{BLIND_NONE} false alarms (blind set)",
+)
+def test_the_targets_hold_on_the_blind_plants(blind_verdicts):
+    named, alarms = named_and_alarms(blind_verdicts)
+    assert named >= 0.9 * BLIND_EFFECTS and alarms <= BLIND_NONE / 10, blind_verdicts
+
+
+@pytest.mark.slow
+def test_the_scorecards_do_not_fall_below_the_recorded_numbers(verdicts, tuning_verdicts, blind_verdicts):
     """What README and docs/benchmarks.md report (``--duration 100``); a change of the method that
     names fewer or alarms more must show up here, not only in a re-run of the bench."""
     assert named_and_alarms(verdicts)[0] >= FRESH_NAMED, verdicts
     assert named_and_alarms(verdicts)[1] <= FRESH_ALARMS, verdicts
     assert named_and_alarms(tuning_verdicts)[0] >= TUNING_NAMED, tuning_verdicts
     assert named_and_alarms(tuning_verdicts)[1] <= TUNING_ALARMS, tuning_verdicts
+    assert named_and_alarms(blind_verdicts)[0] >= BLIND_NAMED, blind_verdicts
+    assert named_and_alarms(blind_verdicts)[1] <= BLIND_ALARMS, blind_verdicts
 
 
 # The rate-dependent PI plant (tests/foreign_plant.py) that the method before v4 named right on

@@ -20,7 +20,9 @@ candidate can be judged on. A candidate passes when
 ``slow_drift`` names a drift no column explains only when no physical cause passes: it is the
 yardstick, and a creep or a load effect that it also fits is the better explanation. It must
 then also beat shifted copies of its ramp in time (tents and kinked slopes: what a slowly
-changing structural error is fitted by as well), with the same p-value rule as a column. When a
+changing structural error is fitted by as well), with the same p-value rule as a column. A
+drift that fails this is no drift to name, and so no drift a time-following column could be
+named for either (the confound rule below needs a drift that passes). When a
 measured column follows time too closely to tell the two apart (|r| >= :data:`CONFOUNDED_R`)
 and both explain the drift, the verdict names the column's cause with that confound stated.
 
@@ -144,8 +146,9 @@ def against_baseline(s: CandidateScore, noise: float, surrogates: bool = True) -
     if surrogates and p is not None and p > SURROGATE_ALPHA:
         what = "the ramp in time" if s.cause == "slow_drift" else "its column"
         return (
-            f"shifted copies of {what} gain as much on this record (mean gain {s.mean:+.1%} vs "
-            f"surrogates up to {max(s.null_gains):+.1%}; surrogate p = {p:.2g})"
+            f"it does not beat every shifted copy of {what} (mean gain {s.mean:+.1%}, the best of "
+            f"{len(s.null_gains)} copies {max(s.null_gains):+.1%}; surrogate p = {p:.2g}, at most "
+            f"{SURROGATE_ALPHA:g} needed)"
         )
     return None
 
@@ -191,6 +194,16 @@ def why_not(
     if reason is None and s.cause == "rate_dependence" and lag is not None:
         reason = against_lag(s, lag)
     return reason
+
+
+def drift_would_be_named(scores: dict[str, CandidateScore], noise: float) -> bool:
+    """Whether ``slow_drift`` passes without its surrogate null while no physical cause passes:
+    the one case in which :func:`choose` names the drift, so its null must be computed."""
+    drift = scores.get("slow_drift")
+    if drift is None or against_baseline(drift, noise) is not None:
+        return False
+    lag = scores.get("output_lag")
+    return not any(why_not(scores[c], noise, drift, lag) is None for c in PHYSICAL_CAUSES if c in scores)
 
 
 def choose(
@@ -276,6 +289,8 @@ def choose(
         return Verdict(best, reason + note, decided_by, confidence, passing)
     why = reasons[best] or "it does not pass"
     reason = f"no extension improves held-out error convincingly: the best ({best}) does not count because {why}"
+    if drift is not None and best != "slow_drift" and drift.null_gains and reasons.get("slow_drift"):
+        reason += f"; nor does a slow drift in time: {reasons['slow_drift']}"
     lag = scores.get("output_lag")
     if lag is not None and reasons.get("output_lag") is None:
         reason += (

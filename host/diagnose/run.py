@@ -8,7 +8,8 @@
    term coefficients are refitted on the other folds' rows and scored (RMSE) on the held-out rows
    it can be judged on; a candidate's score per fold is its relative reduction of held-out RMSE
    against the baseline on the same rows. A measured column's terms are also scored with nine
-   shifted copies of the column in its place (the surrogate null of that cause).
+   shifted copies of the column in its place (the surrogate null of that cause), and so is the
+   ramp in time of ``slow_drift`` when the drift would be named.
 3. :func:`host.diagnose.decide.choose` names the cause with calibrated evidence, or ``none``
    with the reason; :func:`host.diagnose.decide.with_signatures` then applies the two-stage rule:
    a residual signature (:mod:`host.diagnose.signatures`, surrogate-calibrated) nominates a cause
@@ -47,11 +48,9 @@ from host.diagnose.candidates import (
 )
 from host.diagnose.decide import (
     BLOWUP_RATIO,
-    PHYSICAL_CAUSES,
     CandidateScore,
-    against_baseline,
     choose,
-    why_not,
+    drift_would_be_named,
     with_signatures,
 )
 from host.diagnose.evidence import baseline_evidence
@@ -348,7 +347,7 @@ def _drift_null(ctx: Context, masks: list[NDArray[np.bool_]], base_folds: list[N
     itself (tents and slopes with a kink, placed at random). A structural error that changes
     across a protocol (growing amplitudes, a level held longer at the end) is fitted by such
     slow shapes of time as well as by the ramp; a drift is monotone in time and fits the ramp
-    better than most of them."""
+    better than all nine of them (surrogate p <= 0.1)."""
     return _surrogate_gains(ctx, "slow_drift", ctx.t, partial(slow_drift, ctx), masks, base_folds)
 
 
@@ -407,11 +406,8 @@ def _diagnose(
                     margin = (drift_rmse - column_rmse) / base_rmse
             scores[cause].drift_margins.append(margin)
     noise = noise_floor(ctx.y)
-    drift = scores["slow_drift"]
-    if against_baseline(drift, noise) is None and not any(
-        why_not(scores[c], noise, drift, scores["output_lag"]) is None for c in PHYSICAL_CAUSES
-    ):  # the drift would be named: only then is its surrogate null worth its cost
-        drift.null_gains = _drift_null(ctx, masks, base_folds)
+    if drift_would_be_named(scores, noise):  # only then is the drift's surrogate null worth its cost
+        scores["slow_drift"].null_gains = _drift_null(ctx, masks, base_folds)
     time_correlation = {
         name: float(np.corrcoef(values, ctx.t)[0, 1]) for name, values in ctx.extras.items() if np.ptp(values) > 0
     }
