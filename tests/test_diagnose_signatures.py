@@ -129,7 +129,7 @@ def test_a_measured_column_must_beat_its_shifted_copies():
     scores = scores_with(load_dependence=[0.21, 0.18, 0.19, 0.187])
     scores["load_dependence"].null_gains = [0.05, 0.02, 0.22, 0.0, 0.01, 0.03, 0.04, -0.02, 0.06]
     v = choose(scores, 0.0)
-    assert v.cause == "none" and "shifted copies" in v.reason
+    assert v.cause == "none" and "does not beat every shifted copy of its column" in v.reason
     assert v.confidence["surrogate_p"] == {"load_dependence": 0.2}
     scores["load_dependence"].null_gains = [0.05, 0.02, 0.12, 0.0, 0.01, 0.03, 0.04, -0.02, 0.06]
     v = choose(scores, 0.0)
