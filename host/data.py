@@ -3,12 +3,12 @@
 Every problem is one :class:`~edge.errors.DataError` whose message names the file, the line,
 the problem and the fix: a row with too few or too many fields, a duplicated column name, NaN or
 text in t/u/y or in a named optional column (load, temperature, p: a model fitted on one would
-drop it or be poisoned by it; other extra columns may have holes), values too large to fit (beyond 1e100), time that does not increase, and a time
-gap of more than ``max_gap_periods`` sample periods (two recordings in one file: resampling
-across it would invent millions of samples). A UTF-8 byte-order mark (Excel's "CSV UTF-8") and
-quoted numbers are read as such. Irregular sampling beyond ``tolerance`` (relative spread of the
-time step) is either resampled onto a uniform grid at the median step, with a warning saying so,
-or refused.
+drop it or be poisoned by it; other extra columns may have holes), values too large to fit
+(beyond 1e100), time that does not increase, and a time gap of more than ``max_gap_periods``
+sample periods (two recordings in one file: resampling across it would invent millions of
+samples). A UTF-8 byte-order mark (Excel's "CSV UTF-8") and quoted numbers are read as such.
+Irregular sampling beyond ``tolerance`` (relative spread of the time step) is either resampled
+onto a uniform grid at the median step, with a warning saying so, or refused.
 """
 
 from __future__ import annotations
