@@ -407,7 +407,10 @@ def _diagnose(
             scores[cause].drift_margins.append(margin)
     noise = noise_floor(ctx.y)
     if drift_would_be_named(scores, noise):  # only then is the drift's surrogate null worth its cost
-        scores["slow_drift"].null_gains = _drift_null(ctx, masks, base_folds)
+        with _progress(1, progress) as bar:  # nine joint fits: seconds, said on the progress line
+            bar.set_description("diagnose: drift surrogates")
+            scores["slow_drift"].null_gains = _drift_null(ctx, masks, base_folds)
+            bar.update()
     time_correlation = {
         name: float(np.corrcoef(values, ctx.t)[0, 1]) for name, values in ctx.extras.items() if np.ptp(values) > 0
     }
