@@ -17,7 +17,6 @@ import argparse
 import json
 import sys
 import time
-import warnings
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
@@ -26,7 +25,6 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from edge.errors import DataError  # noqa: E402
 from tests.plants.injected_real import InjectedCase, injected_cases, injected_measurement  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
@@ -54,59 +52,24 @@ def dry_run(cases: list[InjectedCase], data: Path) -> list[dict[str, Any]]:
 
 def score(cases: list[InjectedCase], data: Path) -> list[dict[str, Any]]:
     """Diagnose every record; one printed line per record."""
-    from host.diagnose.run import diagnose  # only when scoring: --dry-run never runs the method
+    from bench.diagnose_scorecard import diagnosed, line  # only when scoring: --dry-run never runs the method
 
     rows = []
     for case in cases:
         m, truth = injected_measurement(case, data)
-        start = time.process_time()
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                d = diagnose(m, progress=False)
-        except DataError as refusal:  # a record the method refuses (one line) is a miss, not a crash
-            print(f"{'REFUSED':<7} {case.name:<58} -> {refusal}", flush=True)
-            rows.append(
-                {
-                    "case": case.name,
-                    "kind": case.plant,
-                    "base": case.base,
-                    "effect": case.effect,
-                    "form": case.form,
-                    "verdict": "refused",
-                    "refusal": str(refusal),
-                    "gain": 0.0,
-                    "cpu_s": time.process_time() - start,
-                    "samples": len(m),
-                    "decided_by": "refused",
-                    "size_over_noise": truth["effect_size_over_noise"],
-                    "size_over_span": truth["effect_size_over_span"],
-                }
-            )
-            continue
-        cpu = time.process_time() - start
         row = {
             "case": case.name,
             "kind": case.plant,
             "base": case.base,
             "effect": case.effect,
             "form": case.form,
-            "verdict": d.cause,
-            "gain": d.gain,
-            "confidence": d.confidence,
-            "cpu_s": cpu,
-            "samples": len(m),
-            "decided_by": d.decided_by,
+            **diagnosed(m),
             "size_over_noise": truth["effect_size_over_noise"],
             "size_over_span": truth["effect_size_over_span"],
         }
         rows.append(row)
-        mark = "base" if case.effect == "none" else "ok" if d.cause == case.effect else "MISS"
-        print(
-            f"{mark:<5} {case.name:<58} -> {d.cause:<18} gain {d.gain:6.1%} "
-            f"margin {d.confidence.get('over_threshold', float('nan')):+.3f} cpu {cpu:5.1f}s  ({d.decided_by})",
-            flush=True,
-        )
+        mark = "base" if case.effect == "none" else "ok" if row["verdict"] == case.effect else "MISS"
+        print(line(mark, case.name, row), flush=True)
     return rows
 
 

@@ -27,6 +27,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from edge.errors import DataError  # noqa: E402
 from host.data import Measurement  # noqa: E402
 from host.diagnose.run import diagnose  # noqa: E402
 from tests.plants.blind_family import blind_cases, blind_measurement  # noqa: E402
@@ -40,37 +41,48 @@ SETS = {
 }
 
 
+def diagnosed(m: Measurement) -> dict[str, object]:
+    """One scored diagnosis of ``m`` (warnings silenced): verdict, held-out gain, confidence, CPU
+    seconds, samples, which evidence decided. A record the method refuses in one line (a
+    ``DataError``) is the verdict ``refused`` with its message: a counted miss, not a crash."""
+    start = time.process_time()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            d = diagnose(m, progress=False)
+    except DataError as refusal:
+        outcome: dict[str, object] = {"verdict": "refused", "refusal": str(refusal), "gain": 0.0, "confidence": {}}
+        outcome["decided_by"] = "refused"
+    else:
+        outcome = {"verdict": d.cause, "gain": d.gain, "confidence": d.confidence, "decided_by": d.decided_by}
+    return {**outcome, "cpu_s": time.process_time() - start, "samples": len(m)}
+
+
+def line(mark: str, name: str, row: dict[str, object]) -> str:
+    """The printed line of one scored record."""
+    if row["verdict"] == "refused":
+        return f"{'REFUSED':<7} {name:<58} -> {row['refusal']}"
+    confidence = row["confidence"]
+    assert isinstance(confidence, dict)
+    return (
+        f"{mark:<5} {name:<58} -> {row['verdict']:<18} gain {row['gain']:6.1%} "
+        f"margin {confidence.get('over_threshold', float('nan')):+.3f} cpu {row['cpu_s']:5.1f}s  ({row['decided_by']})"
+    )
+
+
 def score(
     case_list: list[Case], record: Callable[[Case], tuple[Measurement, dict[str, object]]]
 ) -> list[dict[str, object]]:
     rows = []
     for case in case_list:
         m, _truth = record(case)
-        start = time.process_time()
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            d = diagnose(m, progress=False)
-        cpu = time.process_time() - start
-        row = {
-            "case": case.name,
-            "plant": case.plant,
-            "effect": case.effect,
-            "form": case.form,
-            "verdict": d.cause,
-            "gain": d.gain,
-            "confidence": d.confidence,
-            "cpu_s": cpu,
-            "samples": len(m),
-            "decided_by": d.decided_by,
-            "signature_p": d.confidence.get("signature_p", {}),
-        }
+        row = {"case": case.name, "plant": case.plant, "effect": case.effect, "form": case.form, **diagnosed(m)}
+        confidence = row["confidence"]
+        assert isinstance(confidence, dict)
+        row["signature_p"] = confidence.get("signature_p", {})
         rows.append(row)
-        ok = "ok " if d.cause == case.effect else "MISS" if case.effect != "none" else "FALSE"
-        print(
-            f"{ok:<5} {case.name:<58} -> {d.cause:<18} gain {d.gain:6.1%} "
-            f"margin {d.confidence['over_threshold']:+.3f} cpu {cpu:5.1f}s  ({d.decided_by})",
-            flush=True,
-        )
+        ok = "ok " if row["verdict"] == case.effect else "MISS" if case.effect != "none" else "FALSE"
+        print(line(ok, case.name, row), flush=True)
     return rows
 
 
