@@ -21,8 +21,6 @@ from tests.plants.blind_cores import BLIND_CORES, Hooks
 from tests.plants.blind_effects import BLIND_FORMS, render
 from tests.plants.blind_family import (
     BLIND_PLANTS,
-    EFFECT_MAX_OVER_SPAN,
-    EFFECT_MIN_OVER_NOISE,
     NONE_PER_PLANT,
     blind_cases,
     blind_measurement,
@@ -31,6 +29,7 @@ from tests.plants.blind_family import (
     simulate,
 )
 from tests.plants.blind_protocols import BLIND_PROTOCOLS, vented_start
+from tests.plants.visibility import EFFECT_MAX_OVER_SPAN, EFFECT_MIN_OVER_NOISE
 
 DURATION_S = 40.0
 CASES = blind_cases(DURATION_S)

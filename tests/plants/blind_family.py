@@ -10,7 +10,8 @@ new). Only numbers are reported from it: it is scored once and never used to cho
 Every effect case is *visible*: its effect size (RMS [mm] of the noise-free output with the
 effect minus the same plant, protocol and seed with the effect switched off) lies in
 ``[EFFECT_MIN_OVER_NOISE * noise, EFFECT_MAX_OVER_SPAN * span]``; otherwise the intensity is
-scaled (at most 4x either way, recorded as ``intensity_rescale`` in the truth) until it does.
+scaled (at most 4x either way, recorded as ``intensity_rescale`` in the truth) until it does
+(:mod:`tests.plants.visibility`).
 
 Confounds a real rig has, kept in the effect-free records too: the chamber's fill/vent and
 thermal dynamics (a slow pressure tail after every move), the Preisach core's resonance, the
@@ -33,6 +34,7 @@ from tests.plants.blind_cores import BAR_PA, BLIND_CORES, G_MS2, R_AIR, muscle_f
 from tests.plants.blind_effects import BLIND_FORMS, INTENSITY_KEY, columns, draw_effect_params, render
 from tests.plants.blind_protocols import BLIND_PROTOCOLS, vented_start
 from tests.plants.family import Case
+from tests.plants.visibility import scale_into_band
 
 Array = NDArray[np.float64]
 BLIND_PLANTS = tuple(BLIND_CORES)
@@ -40,9 +42,6 @@ BLIND_RATES_HZ = (60.0, 150.0, 300.0, 100.0, 450.0, 200.0, 90.0)
 NOISE_MM = {"lugre_mckibben": 0.03, "preisach_resonant": 0.02, "asym_play_poly": 0.05, "valve_chamber": 0.04}
 NONE_PER_PLANT = 5
 SEED_BASE = 9100
-EFFECT_MIN_OVER_NOISE = 5.0
-EFFECT_MAX_OVER_SPAN = 0.12
-MAX_RESCALE = 4.0
 
 
 def _geometry(rng: np.random.Generator, peak: float, kappa: float) -> dict[str, float]:
@@ -144,10 +143,6 @@ def blind_cases(duration_s: float = 150.0) -> list[Case]:
     return out
 
 
-def _rms(x: Array) -> float:
-    return float(np.sqrt(np.mean(x * x)))
-
-
 def simulate(case: Case) -> dict[str, Any]:
     """Noise-free outputs with and without the effect, the input, the columns and the truth."""
     if case.plant not in BLIND_CORES:
@@ -166,19 +161,11 @@ def simulate(case: Case) -> dict[str, Any]:
     span = float(np.ptp(off))
     on, size, rescale = off, 0.0, 1.0
     if case.effect != "none":
-        lo, hi = EFFECT_MIN_OVER_NOISE * noise, EFFECT_MAX_OVER_SPAN * span
-        key = INTENSITY_KEY[case.form]
-        for _ in range(8):
-            on = render(core, params, u, dt, case.form, q, load, temperature, off)
-            size = _rms(on - off)
-            if lo <= size <= hi:
-                break
-            step = 1.3 * lo / max(size, 1e-12) if size < lo else 0.85 * hi / size
-            step = float(np.clip(step, 1.0 / MAX_RESCALE / rescale, MAX_RESCALE / rescale))
-            if abs(step - 1.0) < 1e-9:
-                break  # at the limit of the rescale: reported as it is, the tests catch it
-            q[key] *= step
-            rescale *= step
+
+        def with_effect() -> Array:
+            return render(core, params, u, dt, case.form, q, load, temperature, off)
+
+        on, size, rescale = scale_into_band(with_effect, off, noise, span, q, INTENSITY_KEY[case.form], grow=1.3)
     truth: dict[str, Any] = {
         "effect": case.effect,
         "form": case.form,
