@@ -211,8 +211,8 @@ def choose(
 ) -> Verdict:
     """The verdict over every candidate's fold record (see the module docstring).
     ``time_correlation``: each measured column's correlation with time over the record."""
-    drift = scores.get("slow_drift")
-    reasons = {c: why_not(s, noise, drift, scores.get("output_lag")) for c, s in scores.items()}
+    drift, lag = scores.get("slow_drift"), scores.get("output_lag")
+    reasons = {c: why_not(s, noise, drift, lag) for c, s in scores.items()}
     # the lag after the hysteresis is the baseline's missing dynamics: a yardstick, never a verdict
     passing = [c for c in CAUSES if c in scores and reasons[c] is None and c != "output_lag"]
     physical = [c for c in passing if c in PHYSICAL_CAUSES]
@@ -291,7 +291,6 @@ def choose(
     reason = f"no extension improves held-out error convincingly: the best ({best}) does not count because {why}"
     if drift is not None and best != "slow_drift" and drift.null_gains and reasons.get("slow_drift"):
         reason += f"; nor does a slow drift in time: {reasons['slow_drift']}"
-    lag = scores.get("output_lag")
     if lag is not None and reasons.get("output_lag") is None:
         reason += (
             f"; a linear lag after the hysteresis gains {lag.mean:+.1%}: the baseline's dynamics are incomplete "
