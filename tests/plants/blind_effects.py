@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.signal import lfilter
 
 from tests.plants.blind_cores import Core, Hooks
+from tests.plants.effects import lowpass
 
 Array = NDArray[np.float64]
 BLIND_FORMS: dict[str, tuple[str, ...]] = {
@@ -45,12 +45,6 @@ INTENSITY_KEY: dict[str, str] = {  # the parameter that scales each form's size
     "entropic_rubber": "stiffening_per_k",
     "zero_shift": "zero_share_per_10k",
 }
-
-
-def lowpass(x: Array, dt_s: float, tau_s: float) -> Array:
-    """First-order lag with time constant ``tau_s`` [s], starting at rest on ``x[0]``."""
-    a = 1.0 - np.exp(-dt_s / tau_s)
-    return np.asarray(lfilter([a], [1.0, a - 1.0], x, zi=[x[0] * (1 - a)])[0], dtype=np.float64)
 
 
 def _asymmetric_lag(x: Array, dt_s: float, tau_up_s: float, tau_down_s: float) -> Array:

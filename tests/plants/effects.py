@@ -27,8 +27,9 @@ FORMS: dict[str, tuple[str, ...]] = {
 
 
 def lowpass(x: Array, dt_s: float, tau_s: float) -> Array:
+    """First-order lag with time constant ``tau_s`` [s], starting at rest on ``x[0]``."""
     a = 1.0 - np.exp(-dt_s / tau_s)
-    return lfilter([a], [1.0, a - 1.0], x, zi=[x[0] * (1 - a)])[0]
+    return np.asarray(lfilter([a], [1.0, a - 1.0], x, zi=[x[0] * (1 - a)])[0], dtype=np.float64)
 
 
 def load_steps(t: Array, rng: np.random.Generator) -> Array:

@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.signal import lfilter
 
+from tests.plants.effects import lowpass
 from tests.plants.fresh_cores import Core, Hooks
 
 Array = NDArray[np.float64]
@@ -40,12 +40,6 @@ INTENSITY_KEY: dict[str, str] = {  # the parameter that scales each form's size
     "offset_gain": "temp_scale",
     "stiffness": "softening_per_k",
 }
-
-
-def lowpass(x: Array, dt_s: float, tau_s: float) -> Array:
-    """First-order lag with time constant ``tau_s`` [s], starting at rest on ``x[0]``."""
-    a = 1.0 - np.exp(-dt_s / tau_s)
-    return np.asarray(lfilter([a], [1.0, a - 1.0], x, zi=[x[0] * (1 - a)])[0], dtype=np.float64)
 
 
 # ---- the load [kg] and temperature [degC] columns ---------------------------------------------
