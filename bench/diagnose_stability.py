@@ -1,0 +1,96 @@
+"""How stable are ``pmactl diagnose``'s verdicts when the start of a record is cut off?
+
+Usage: python bench/diagnose_stability.py [--set tuning|fresh|blind|...] [--duration S] [--cuts 7,14]
+       [--workers N] [--only TEXT]
+
+A verdict that changes when the first 7 or 14 s of a record are dropped says more about where the
+record happens to start than about the plant (the issue's check: cutting 7-14 s changed 9 of 18
+verdicts). Each record is diagnosed whole and with each cut; printed: one line per record with
+its verdicts, then per set how many records kept one verdict over all cuts, how many verdicts
+changed per cut, and the named/false-alarm counts per cut. A record the method refuses after a
+cut (the shorter record no longer reaches its input's extremes early enough) counts as a change.
+
+CPU: (1 + number of cuts) diagnoses per record, ~4 s each at 100 s; ``--workers 2`` splits
+records over two processes (wall time halves on an idle 2-core machine).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections import Counter
+from multiprocessing import Pool
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from bench.diagnose_scorecard import SETS, diagnosed  # noqa: E402
+from tests.plants.family import Case  # noqa: E402
+
+
+def verdicts(job: tuple[str, Case, tuple[float, ...]]) -> dict[str, object]:
+    """The verdict of ``case`` whole and after each cut [s] (``cut 0`` is the whole record)."""
+    set_name, case, cuts = job
+    m, _truth = SETS[set_name][1](case)
+    out: dict[str, object] = {"set": set_name, "case": case.name, "effect": case.effect}
+    for cut in (0.0, *cuts):
+        row = diagnosed(m.slice(int(round(cut / m.dt))) if cut else m)
+        out[f"cut {cut:g}"] = row["verdict"]
+        out[f"cpu {cut:g}"] = row["cpu_s"]
+    return out
+
+
+def summary(rows: list[dict[str, object]], cuts: tuple[float, ...]) -> None:
+    """Stability and detection per cut, for one set's rows."""
+    keys = [f"cut {c:g}" for c in (0.0, *cuts)]
+    stable = sum(len({r[k] for k in keys}) == 1 for r in rows)
+    print(f"one verdict over every cut: {stable}/{len(rows)} ({stable / max(1, len(rows)):.0%})")
+    for key in keys[1:]:
+        changed = [r for r in rows if r[key] != r[keys[0]]]
+        moves = Counter(f"{r[keys[0]]}->{r[key]}" for r in changed)
+        listed = ", ".join(f"{move} x{count}" for move, count in moves.most_common())
+        print(f"  {key} s: {len(changed)}/{len(rows)} changed: {listed}")
+    effect_rows = [r for r in rows if r["effect"] != "none"]
+    nones = [r for r in rows if r["effect"] == "none"]
+    for key in keys:
+        named = sum(r[key] == r["effect"] for r in effect_rows)
+        false = sum(r[key] != "none" for r in nones)
+        print(f"  {key} s: named {named}/{len(effect_rows)}, false alarms {false}/{len(nones)}")
+    cpu = [float(r[f"cpu {c:g}"]) for r in rows for c in (0.0, *cuts)]  # type: ignore[arg-type]
+    print(f"  CPU per diagnosis: median {sorted(cpu)[len(cpu) // 2]:.1f} s, max {max(cpu):.1f} s")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--set", default="tuning", help=f"comma-separated, of {', '.join(SETS)}")
+    parser.add_argument("--duration", type=float, default=100.0, metavar="S")
+    parser.add_argument("--cuts", default="7,14", help="seconds cut from the start, comma-separated")
+    parser.add_argument("--workers", type=int, default=1)
+    parser.add_argument("--only", help="run only cases whose name contains this text")
+    args = parser.parse_args(argv)
+    sets = args.set.split(",")
+    unknown = [s for s in sets if s not in SETS]
+    if unknown:
+        parser.error(f"unknown set {', '.join(unknown)}; use {', '.join(SETS)}")
+    cuts = tuple(float(c) for c in args.cuts.split(","))
+    jobs = [
+        (name, case, cuts)
+        for name in sets
+        for case in SETS[name][0](args.duration)
+        if not args.only or args.only in case.name
+    ]
+    with Pool(max(1, args.workers)) as pool:
+        rows = []
+        for row in pool.imap(verdicts, jobs):
+            rows.append(row)
+            cells = " ".join(f"{row[f'cut {c:g}']!s:<17}" for c in (0.0, *cuts))
+            flag = "    " if len({row[f"cut {c:g}"] for c in (0.0, *cuts)}) == 1 else "FLIP"
+            print(f"{flag} {row['case']:<60} {cells}", flush=True)
+    for name in sets:
+        print(f"\n## {name} set, cuts {args.cuts} s of {args.duration:g} s records")
+        summary([r for r in rows if r["set"] == name], cuts)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
