@@ -207,7 +207,8 @@ def capstan_bounds(pr: Array, p: dict[str, float]) -> tuple[Array, Array]:
 
 def capstan_exo(u: Array, dt_s: float, p: dict[str, float]) -> Array:
     """The joint stays put while the sheath's capstan friction holds it between
-    :func:`capstan_bounds`; a soft end stop; the exo joint's inertia resonance [mm]."""
+    :func:`capstan_bounds`; a soft end stop; the exo joint's inertia resonance, which cannot
+    ring below the joint's rest stop [mm]."""
     up, down = capstan_bounds(valve_line(u, dt_s, p), p)
     out = np.empty_like(up)
     x = 0.0
@@ -215,7 +216,8 @@ def capstan_exo(u: Array, dt_s: float, p: dict[str, float]) -> Array:
         x = lo if x < lo else hi if x > hi else x
         out[i] = x
     stop = p["stop_mm"]
-    return resonance(stop * np.tanh(out / stop), dt_s, p["f_res_hz"], p["zeta"])
+    ringing = resonance(stop * np.tanh(out / stop), dt_s, p["f_res_hz"], p["zeta"])
+    return np.maximum(ringing, 0.0)  # the joint rests on its stop when the cable goes slack
 
 
 BLIND2_CORES: dict[str, Core] = {

@@ -61,7 +61,10 @@ def load_dumbbell_sets(t: Array, rng: np.random.Generator) -> Array:
     holding = False
     while knots_t[-1] < t[-1]:
         level = float(rng.uniform(1.5, 5.0) if not holding else rng.uniform(0.2, 0.8))
-        move, stay = float(rng.uniform(0.4, 1.0)), float(rng.uniform(6.0, 18.0) if not holding else rng.uniform(4.0, 12.0))
+        move, stay = (
+            float(rng.uniform(0.4, 1.0)),
+            float(rng.uniform(6.0, 18.0) if not holding else rng.uniform(4.0, 12.0)),
+        )
         knots_t += [knots_t[-1] + move, knots_t[-1] + move + stay]
         knots_l += [level, level]
         holding = not holding
@@ -131,16 +134,24 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
         return {"resistance": rng.uniform(0.12, 0.25)}
     if form == "burgers_flow":  # Maxwell flow over flow_s plus a Kelvin part (tau), of the span
         return {"creep_share": rng.uniform(0.05, 0.1), "flow_s": 60.0, "kelvin_tau_s": rng.uniform(5.0, 20.0)}
-    if form == "eyring_braid":  # z' = rate sinh((v - z) / s0) [1/s]
-        return {"creep_share": rng.uniform(0.06, 0.12), "rate": rng.uniform(0.002, 0.008), "s0": rng.uniform(0.03, 0.06)}
+    if form == "eyring_braid":  # z' = (s0 / tau_s) sinh((v - z) / s0): near rest it relaxes in tau_s
+        return {"creep_share": rng.uniform(0.06, 0.1), "tau_s": rng.uniform(60.0, 240.0), "s0": rng.uniform(0.08, 0.15)}
     if form == "bus_latency":  # whole bus cycles of cycle_s, +-1 cycle of jitter per cycle
-        return {"latency_s": rng.uniform(0.05, 0.12), "cycle_s": rng.uniform(0.004, 0.01), "jitter_seed": rng.integers(1 << 30)}
+        return {
+            "latency_s": rng.uniform(0.05, 0.12),
+            "cycle_s": rng.uniform(0.004, 0.01),
+            "jitter_seed": float(rng.integers(1 << 30)),
+        }
     if form == "line_echo":  # dead time and a reflection arriving 2 dead times later
         return {"dead_time_s": rng.uniform(0.03, 0.07), "reflection": rng.uniform(0.1, 0.3)}
     if form == "guide_friction":  # Coulomb coefficient of the guide the payload presses on
         return {"mu": rng.uniform(0.1, 0.25)}
     if form == "lever_geometry":  # share of the payload's weight at the lever; angle at y = 0; arm [mm]
-        return {"lever_ratio": rng.uniform(0.12, 0.3), "phi0_rad": rng.uniform(-0.5, 0.5), "arm_mm": rng.uniform(40.0, 80.0)}
+        return {
+            "lever_ratio": rng.uniform(0.12, 0.3),
+            "phi0_rad": rng.uniform(-0.5, 0.5),
+            "arm_mm": rng.uniform(40.0, 80.0),
+        }
     if form == "valve_sensor_offset":  # zero drift of the valve's pressure sensor; valve body lag
         return {"bar_per_k": rng.uniform(0.025, 0.05), "valve_tau_s": rng.uniform(5.0, 20.0)}
     if form == "nylon_tether":  # length [m], expansion [1/K], compliance [mm/N], softening [1/K], lag [s]
@@ -198,7 +209,7 @@ def _guide_play(x: Array, radius: Array) -> Array:
     return out
 
 
-def drive_of(u: Array, dt_s: float, params: dict[str, float], form: str, q: dict[str, float], temperature: Array) -> Array:
+def drive_of(u: Array, dt_s: float, form: str, q: dict[str, float], temperature: Array) -> Array:
     """The pressure [bar] reaching the core: ``u`` unless ``form`` acts on the input side."""
     if form == "orifice_drop":
         return _orifice(u, dt_s, q["resistance"])
@@ -238,7 +249,7 @@ def render(
     start from it and take their scale from its span.
     """
     if form in INPUT_SIDE:
-        return core(drive_of(u, dt_s, params, form, q, temperature), dt_s, params)
+        return core(drive_of(u, dt_s, form, q, temperature), dt_s, params)
     x = core(u, dt_s, params) if base is None else base
     span = float(np.ptp(x))
     v = np.clip(u / params["peak"], 0.0, None)
@@ -248,7 +259,7 @@ def render(
         flow = np.cumsum(v) * dt_s / q["flow_s"]
         return x + 0.5 * q["creep_share"] * span * (flow + lowpass(v, dt_s, q["kelvin_tau_s"]))
     if form == "eyring_braid":
-        return x + q["creep_share"] * span * _eyring(v, dt_s, q["rate"], q["s0"])
+        return x + q["creep_share"] * span * _eyring(v, dt_s, q["s0"] / q["tau_s"], q["s0"])
     if form == "guide_friction":
         return _guide_play(x, q["mu"] * 9.81 * load / stiffness_n_mm(u, params))
     if form == "lever_geometry":
