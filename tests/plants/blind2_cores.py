@@ -249,7 +249,7 @@ def draw_params(core: str, rng: np.random.Generator, peak: float) -> dict[str, f
         return {
             **_rig(rng, peak, 4.0, 12.0, 0.15, 0.4),
             "a": rng.uniform(0.3, 0.5),
-            "k": rng.uniform(0.02, 0.045),
+            "k": rng.uniform(0.018, 0.038),
             "c": rng.uniform(0.1, 0.3),
             "alpha": rng.uniform(0.0, 0.03),
             "h0": rng.uniform(0.2, 0.35),

@@ -264,7 +264,8 @@ def render(
         return _guide_play(x, q["mu"] * 9.81 * load / stiffness_n_mm(u, params))
     if form == "lever_geometry":
         angle = q["phi0_rad"] + x / q["arm_mm"]
-        return x - q["lever_ratio"] * 9.81 * load * np.cos(angle) / stiffness_n_mm(u, params)
+        sagged = x - q["lever_ratio"] * 9.81 * load * np.cos(angle) / stiffness_n_mm(u, params)
+        return np.asarray(np.maximum(sagged, np.minimum(x, 0.0)), dtype=np.float64)  # the rest stop holds
     if form == "nylon_tether":
         dtemp = lowpass(temperature, dt_s, q["tau_s"]) - temperature[0]
         tension = 20.0 + stiffness_n_mm(u, params) * x  # N: sensor spring preload plus the muscle's pull

@@ -141,20 +141,28 @@ def report_table(duration_s: float = 100.0) -> str:
         "| plant | effect:form | protocol | rate [Hz] | effect/noise | effect/span | rescale | load/temperature |",
         "|---|---|---|---|---|---|---|---|",
     ]
-    per_effect: dict[str, list[float]] = {}
-    for case in blind2_cases(duration_s):
+    per_effect: dict[str, list[tuple[float, float]]] = {}
+    cases = blind2_cases(duration_s)
+    for case in cases:
         truth = simulate(case)["truth"]
         if case.effect != "none":
-            per_effect.setdefault(case.effect, []).append(truth["effect_size_over_noise"])
+            ratios = (truth["effect_size_over_noise"], truth["effect_size_over_span"])
+            per_effect.setdefault(case.effect, []).append(ratios)
         rows.append(
             f"| {case.plant} | {case.effect}:{case.form} | {case.protocol} | {case.rate_hz:g} | "
             f"{truth['effect_size_over_noise']:.1f} | {100 * truth['effect_size_over_span']:.1f} % | "
             f"{truth['intensity_rescale']:.2f} | {truth['load_pattern']}/{truth['temperature_pattern']} |"
         )
     n_cases = len(rows) - 2
-    rows.append("\n| effect | effect/noise min | median | max |\n|---|---|---|---|")
-    for effect, ratios in per_effect.items():
-        rows.append(f"| {effect} | {min(ratios):.1f} | {float(np.median(ratios)):.1f} | {max(ratios):.1f} |")
+    rows.append("\n| effect | effect/noise min | median | max | effect/span median | max |\n|---|---|---|---|---|---|")
+    for effect, pairs in per_effect.items():
+        over_noise, over_span = np.array([a for a, _ in pairs]), 100.0 * np.array([b for _, b in pairs])
+        rows.append(
+            f"| {effect} | {over_noise.min():.1f} | {np.median(over_noise):.1f} | {over_noise.max():.1f} | "
+            f"{np.median(over_span):.1f} % | {over_span.max():.1f} % |"
+        )
+    rows.append(f"\nprotocols: {', '.join(sorted({c.protocol for c in cases}))}")
+    rows.append(f"rates [Hz]: {', '.join(f'{r:g}' for r in sorted({c.rate_hz for c in cases}))}")
     rows.append(f"\n{n_cases} cases of {duration_s:g} s built in {time.process_time() - start:.1f} CPU s")
     return "\n".join(rows)
 
