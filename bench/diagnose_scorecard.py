@@ -1,6 +1,7 @@
 """Scorecard of ``pmactl diagnose`` on the test plants: the tuning set and the fresh held-out set.
 
-Usage: python bench/diagnose_scorecard.py [--set tuning|fresh|blind|both|all] [--duration S] [--only TEXT] [--json OUT]
+Usage: python bench/diagnose_scorecard.py [--set tuning|fresh|blind|blind2|both|all] [--duration S]
+       [--only TEXT] [--json OUT]
 
 Prints one line per record (plant, effect:form, protocol, rate, verdict, confidence, held-out
 gain, CPU seconds) and a table per set: effects named / missed per plant and effect, false alarms
@@ -9,7 +10,9 @@ set (tests/plants/family.py: Bouc-Wen, generalised play, friction-spring, HIL) i
 and its constants were chosen on; the fresh set (tests/plants/fresh_family.py: four other cores,
 other effect forms, protocols and rates) was built separately and is only reported. The blind
 set (tests/plants/blind_family.py: four more cores, forms, protocols and rates) was built without
-looking at the method, to be scored once. ``both`` is tuning + fresh; ``all`` adds the blind set.
+looking at the method, to be scored once; it has been scored three times and was replaced by
+blind2 (tests/plants/blind2_family.py: four more cores, forms, protocols and rates, built blind
+too). ``both`` is tuning + fresh; ``all`` adds the blind sets.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from edge.errors import DataError  # noqa: E402
 from host.data import Measurement  # noqa: E402
 from host.diagnose.run import diagnose  # noqa: E402
+from tests.plants.blind2_family import blind2_cases, blind2_measurement  # noqa: E402
 from tests.plants.blind_family import blind_cases, blind_measurement  # noqa: E402
 from tests.plants.family import Case, measurement, tuning_cases  # noqa: E402
 from tests.plants.fresh_family import fresh_cases, fresh_measurement  # noqa: E402
@@ -38,6 +42,7 @@ SETS = {
     "tuning": (tuning_cases, measurement),
     "fresh": (fresh_cases, fresh_measurement),
     "blind": (blind_cases, blind_measurement),
+    "blind2": (blind2_cases, blind2_measurement),
 }
 
 
@@ -124,14 +129,14 @@ def table(title: str, rows: list[dict[str, object]]) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--set", choices=["tuning", "fresh", "blind", "both", "all"], default="both")
+    parser.add_argument("--set", choices=[*SETS, "both", "all"], default="both")
     parser.add_argument("--duration", type=float, default=150.0, metavar="S")
     parser.add_argument("--only", help="run only cases whose name contains this text")
     parser.add_argument("--json", type=Path, help="write every row here")
     args = parser.parse_args(argv)
     results: dict[str, list[dict[str, object]]] = {}
     for name, (maker, record) in SETS.items():
-        if args.set in (name, "all") or (args.set == "both" and name != "blind"):
+        if args.set in (name, "all") or (args.set == "both" and name in ("tuning", "fresh")):
             chosen = [c for c in maker(args.duration) if not args.only or args.only in c.name]
             results[name] = score(chosen, record)
     for name, rows in results.items():
