@@ -1,7 +1,7 @@
 """How stable are ``pmactl diagnose``'s verdicts when the start of a record is cut off?
 
 Usage: python bench/diagnose_stability.py [--set tuning|fresh|blind|...] [--duration S] [--cuts 7,14]
-       [--workers N] [--only TEXT]
+       [--from-end] [--workers N] [--only TEXT]
 
 A verdict that changes when the first 7 or 14 s of a record are dropped says more about where the
 record happens to start than about the plant (the issue's check: cutting 7-14 s changed 9 of 18
@@ -9,6 +9,9 @@ verdicts). Each record is diagnosed whole and with each cut; printed: one line p
 its verdicts, then per set how many records kept one verdict over all cuts, how many verdicts
 changed per cut, and the named/false-alarm counts per cut. A record the method refuses after a
 cut (the shorter record no longer reaches its input's extremes early enough) counts as a change.
+``--from-end`` cuts the end instead (what ``pmactl diagnose --stability`` does: the memory start
+stays where it was). Also printed: how often a named cause is right when it held over every cut
+and when it did not (is a stable verdict one to trust?).
 
 CPU: (1 + number of cuts) diagnoses per record, ~4 s each at 100 s; ``--workers 2`` splits
 records over two processes (wall time halves on an idle 2-core machine).
@@ -28,13 +31,15 @@ from bench.diagnose_scorecard import SETS, diagnosed  # noqa: E402
 from tests.plants.family import Case  # noqa: E402
 
 
-def verdicts(job: tuple[str, Case, tuple[float, ...]]) -> dict[str, object]:
-    """The verdict of ``case`` whole and after each cut [s] (``cut 0`` is the whole record)."""
-    set_name, case, cuts = job
+def verdicts(job: tuple[str, Case, tuple[float, ...], bool]) -> dict[str, object]:
+    """The verdict of ``case`` whole and after each cut [s] (``cut 0`` is the whole record), cut
+    from the start or, with ``from_end``, from the end."""
+    set_name, case, cuts, from_end = job
     m, _truth = SETS[set_name][1](case)
     out: dict[str, object] = {"set": set_name, "case": case.name, "effect": case.effect}
     for cut in (0.0, *cuts):
-        row = diagnosed(m.slice(int(round(cut / m.dt))) if cut else m)
+        samples = int(round(cut / m.dt))
+        row = diagnosed((m.slice(0, len(m) - samples) if from_end else m.slice(samples)) if cut else m)
         out[f"cut {cut:g}"] = row["verdict"]
         out[f"cpu {cut:g}"] = row["cpu_s"]
     return out
@@ -56,6 +61,10 @@ def summary(rows: list[dict[str, object]], cuts: tuple[float, ...]) -> None:
         named = sum(r[key] == r["effect"] for r in effect_rows)
         false = sum(r[key] != "none" for r in nones)
         print(f"  {key} s: named {named}/{len(effect_rows)}, false alarms {false}/{len(nones)}")
+    for label, held in (("held over every cut", True), ("changed with a cut", False)):
+        named_rows = [r for r in rows if r[keys[0]] != "none" and (len({r[k] for k in keys}) == 1) == held]
+        right = sum(r[keys[0]] == r["effect"] for r in named_rows)
+        print(f"  a cause named on the whole record that {label}: right {right}/{len(named_rows)}")
     cpu = [float(r[f"cpu {c:g}"]) for r in rows for c in (0.0, *cuts)]  # type: ignore[arg-type]
     print(f"  CPU per diagnosis: median {sorted(cpu)[len(cpu) // 2]:.1f} s, max {max(cpu):.1f} s")
 
@@ -65,6 +74,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--set", default="tuning", help=f"comma-separated, of {', '.join(SETS)}")
     parser.add_argument("--duration", type=float, default=100.0, metavar="S")
     parser.add_argument("--cuts", default="7,14", help="seconds cut from the start, comma-separated")
+    parser.add_argument("--from-end", action="store_true", help="cut the end of each record, not its start")
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--only", help="run only cases whose name contains this text")
     args = parser.parse_args(argv)
@@ -74,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"unknown set {', '.join(unknown)}; use {', '.join(SETS)}")
     cuts = tuple(float(c) for c in args.cuts.split(","))
     jobs = [
-        (name, case, cuts)
+        (name, case, cuts, args.from_end)
         for name in sets
         for case in SETS[name][0](args.duration)
         if not args.only or args.only in case.name
@@ -87,7 +97,8 @@ def main(argv: list[str] | None = None) -> int:
             flag = "    " if len({row[f"cut {c:g}"] for c in (0.0, *cuts)}) == 1 else "FLIP"
             print(f"{flag} {row['case']:<60} {cells}", flush=True)
     for name in sets:
-        print(f"\n## {name} set, cuts {args.cuts} s of {args.duration:g} s records")
+        where = "end" if args.from_end else "start"
+        print(f"\n## {name} set, cuts {args.cuts} s from the {where} of {args.duration:g} s records")
         summary([r for r in rows if r["set"] == name], cuts)
     return 0
 

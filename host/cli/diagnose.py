@@ -27,6 +27,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     diag.add_argument("--report", metavar="DIR", help="write report.md and PNG figures here")
     diag.add_argument("--json", metavar="OUT.json", help="write the result as JSON ('-' for stdout)")
     diag.add_argument("--folds", type=int, default=4, help="blocked held-out folds in time (default 4)")
+    diag.add_argument(
+        "--stability",
+        action="store_true",
+        help="repeat the diagnosis without the last 10%% and 20%% of the record and say whether the verdict holds "
+        "(3x the time)",
+    )
 
     def run_lazily(args: argparse.Namespace) -> int:
         return run(args)
@@ -60,9 +66,11 @@ def run(args: argparse.Namespace) -> int:
         raise DataError("name a recording (pmactl diagnose DATA.csv) or use --train A.csv --test B.csv")
     from host.data import load_measurement
     from host.diagnose.run import diagnose
+    from host.diagnose.stability import diagnose_with_stability
 
     measurement = load_measurement(args.data)
-    result = diagnose(measurement, folds=args.folds, progress=progress)
+    run_diagnosis = diagnose_with_stability if args.stability else diagnose
+    result = run_diagnosis(measurement, folds=args.folds, progress=progress)
     name = Path(args.data).name
     say(f"{name}: cause {result.cause}")
     say(f"  {result.reason}")
@@ -72,6 +80,10 @@ def run(args: argparse.Namespace) -> int:
         f"  confidence: {conf['over_threshold']:+.1%} over its threshold, {conf['over_runner_up']:+.1%} over the "
         f"runner-up ({conf['runner_up']})"
     )
+    stability = cast("dict[str, object] | None", conf.get("stability"))
+    if stability is not None:
+        shortened = ", ".join(f"{k.replace('_', ' ')} -> {v}" for k, v in stability.items() if k != "holds")
+        say(f"  stability: {'holds' if stability['holds'] else 'BORDERLINE'} ({shortened})")
     say(
         f"  held-out RMSE: baseline {result.baseline_rmse:.4g}, extended {result.extended_rmse:.4g} "
         f"(gain {result.gain:.0%}); noise floor {conf['noise_floor']:.3g}"
