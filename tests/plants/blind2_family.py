@@ -39,7 +39,7 @@ from tests.plants.blind2_cores import BLIND2_CORES, draw_params
 from tests.plants.blind2_effects import BLIND2_FORMS, INTENSITY_KEY, columns, draw_effect_params, render
 from tests.plants.blind2_protocols import BLIND2_PROTOCOLS, with_range_check
 from tests.plants.family import Case
-from tests.plants.visibility import scale_into_band
+from tests.plants.visibility import visible_effect
 
 Array = NDArray[np.float64]
 BLIND2_PLANTS = tuple(BLIND2_CORES)
@@ -84,28 +84,12 @@ def simulate(case: Case) -> dict[str, Any]:
     q = draw_effect_params(case.effect, case.form, rng)
     noise = NOISE_MM[case.plant]
     off = render(core, params, u, dt, "none", q, load, temperature)
-    span = float(np.ptp(off))
-    on, size, rescale = off, 0.0, 1.0
-    if case.effect != "none":
 
-        def with_effect() -> Array:
-            return render(core, params, u, dt, case.form, q, load, temperature, off)
+    def with_effect() -> Array:
+        return render(core, params, u, dt, case.form, q, load, temperature, off)
 
-        on, size, rescale = scale_into_band(with_effect, off, noise, span, q, INTENSITY_KEY[case.form], grow=1.3)
-    truth: dict[str, Any] = {
-        "effect": case.effect,
-        "form": case.form,
-        "parameters": dict(q),
-        "plant_parameters": dict(params),
-        "effect_size": size,
-        "effect_size_over_noise": size / noise,
-        "effect_size_over_span": size / span,
-        "intensity_rescale": rescale,
-        "noise": noise,
-        "span": span,
-        "load_pattern": load_pattern,
-        "temperature_pattern": temp_pattern,
-    }
+    key, patterns = INTENSITY_KEY.get(case.form, ""), (load_pattern, temp_pattern)  # no key: effect-free
+    on, truth = visible_effect(case.effect, case.form, with_effect, off, noise, q, key, 1.3, params, patterns)
     return {"t": t, "u": u, "on": on, "off": off, "load": load, "temperature": temperature, "truth": truth}
 
 

@@ -6,6 +6,7 @@ is scaled, at most :data:`MAX_RESCALE` x either way, until it lands there."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,3 +49,39 @@ def scale_into_band(
         q[key] *= step
         rescale *= step
     return on, size, rescale
+
+
+def visible_effect(
+    effect: str,
+    form: str,
+    render_on: Callable[[], Array],
+    off: Array,
+    noise: float,
+    q: dict[str, float],
+    key: str,
+    grow: float,
+    plant_parameters: dict[str, float],
+    patterns: tuple[str, str],
+) -> tuple[Array, dict[str, Any]]:
+    """The output with ``effect`` scaled into the band (``off`` itself for ``"none"``) and the
+    truth record every held-out family keeps: effect, form, parameters, size [mm] and its ratio
+    to the noise and the span, the rescale, and the load and temperature patterns."""
+    span = float(np.ptp(off))
+    on, size, rescale = off, 0.0, 1.0
+    if effect != "none":
+        on, size, rescale = scale_into_band(render_on, off, noise, span, q, key, grow=grow)
+    truth: dict[str, Any] = {
+        "effect": effect,
+        "form": form,
+        "parameters": dict(q),
+        "plant_parameters": dict(plant_parameters),
+        "effect_size": size,
+        "effect_size_over_noise": size / noise,
+        "effect_size_over_span": size / span,
+        "intensity_rescale": rescale,
+        "noise": noise,
+        "span": span,
+        "load_pattern": patterns[0],
+        "temperature_pattern": patterns[1],
+    }
+    return on, truth
