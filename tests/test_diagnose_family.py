@@ -4,8 +4,9 @@
 spring, the HIL); ``tests/plants/fresh_family.py`` the first held-out set (four other cores, other
 effect forms, protocols and rates), built separately; its verdicts were read while the method
 was changed after v4, so it is no longer blind. ``tests/plants/blind_family.py`` is the third set
-(four more cores, new forms, protocols and rates), built blind and scored only before and after
-that change, never to choose between variants. The targets are the
+(four more cores, new forms, protocols and rates), built blind and scored three times, never to
+choose between variants; ``tests/plants/blind2_family.py`` the fourth, built blind for v6 and
+scored once, at its end. The targets are the
 issue's, on the held-out set: at least 90 % of the effects named, at most 1 false alarm in 10
 effect-free records. ``python bench/diagnose_scorecard.py`` prints the same tables with every verdict.
 """
@@ -19,6 +20,7 @@ import pytest
 
 from host.data import Measurement
 from host.diagnose.run import diagnose
+from tests.plants.blind2_family import blind2_cases, blind2_measurement
 from tests.plants.blind_family import blind_cases, blind_measurement
 from tests.plants.family import Case, measurement, tuning_cases
 from tests.plants.fresh_family import fresh_cases, fresh_measurement
@@ -27,6 +29,7 @@ from tests.plants.fresh_family import fresh_cases, fresh_measurement
 FRESH_NAMED, FRESH_EFFECTS, FRESH_ALARMS, FRESH_NONE = 18, 40, 2, 20
 TUNING_NAMED, TUNING_ALARMS = 17, 1
 BLIND_NAMED, BLIND_EFFECTS, BLIND_ALARMS, BLIND_NONE = 10, 40, 4, 20
+BLIND2_NAMED, BLIND2_EFFECTS, BLIND2_ALARMS, BLIND2_NONE = 17, 40, 9, 20
 
 
 def _verdicts(
@@ -54,6 +57,11 @@ def tuning_verdicts() -> list[tuple[str, str]]:
 @pytest.fixture(scope="module")
 def blind_verdicts() -> list[tuple[str, str]]:
     return _verdicts(blind_cases(100.0), blind_measurement)
+
+
+@pytest.fixture(scope="module")
+def blind2_verdicts() -> list[tuple[str, str]]:
+    return _verdicts(blind2_cases(100.0), blind2_measurement)
 
 
 def named_and_alarms(verdicts: list[tuple[str, str]]) -> tuple[int, int]:
@@ -92,7 +100,20 @@ def test_the_targets_hold_on_the_blind_plants(blind_verdicts):
 
 
 @pytest.mark.slow
-def test_the_scorecards_do_not_fall_below_the_recorded_numbers(verdicts, tuning_verdicts, blind_verdicts):
+@pytest.mark.xfail(
+    strict=True,
+    reason=f"below target: {BLIND2_NAMED}/{BLIND2_EFFECTS} named, {BLIND2_ALARMS}/{BLIND2_NONE} false alarms "
+    "(second blind set)",
+)
+def test_the_targets_hold_on_the_second_blind_plants(blind2_verdicts):
+    named, alarms = named_and_alarms(blind2_verdicts)
+    assert named >= 0.9 * BLIND2_EFFECTS and alarms <= BLIND2_NONE / 10, blind2_verdicts
+
+
+@pytest.mark.slow
+def test_the_scorecards_do_not_fall_below_the_recorded_numbers(
+    verdicts, tuning_verdicts, blind_verdicts, blind2_verdicts
+):
     """What README and docs/benchmarks.md report (``--duration 100``); a change of the method that
     names fewer or alarms more must show up here, not only in a re-run of the bench."""
     assert named_and_alarms(verdicts)[0] >= FRESH_NAMED, verdicts
@@ -101,6 +122,8 @@ def test_the_scorecards_do_not_fall_below_the_recorded_numbers(verdicts, tuning_
     assert named_and_alarms(tuning_verdicts)[1] <= TUNING_ALARMS, tuning_verdicts
     assert named_and_alarms(blind_verdicts)[0] >= BLIND_NAMED, blind_verdicts
     assert named_and_alarms(blind_verdicts)[1] <= BLIND_ALARMS, blind_verdicts
+    assert named_and_alarms(blind2_verdicts)[0] >= BLIND2_NAMED, blind2_verdicts
+    assert named_and_alarms(blind2_verdicts)[1] <= BLIND2_ALARMS, blind2_verdicts
 
 
 # The rate-dependent PI plant (tests/foreign_plant.py) that the method before v4 named right on
