@@ -1,4 +1,4 @@
-"""How stable are ``pmactl diagnose``'s verdicts when the start of a record is cut off?
+"""How stable are ``pmactl diagnose``'s verdicts when the start (or the end) of a record is cut off?
 
 Usage: python bench/diagnose_stability.py [--set tuning|fresh|blind|...] [--duration S] [--cuts 7,14]
        [--from-end] [--workers N] [--only TEXT]
@@ -59,10 +59,13 @@ def summary(rows: list[dict[str, object]], cuts: tuple[float, ...]) -> None:
     nones = [r for r in rows if r["effect"] == "none"]
     for key in keys:
         named = sum(r[key] == r["effect"] for r in effect_rows)
-        false = sum(r[key] != "none" for r in nones)
-        print(f"  {key} s: named {named}/{len(effect_rows)}, false alarms {false}/{len(nones)}")
+        false = sum(r[key] not in ("none", "refused") for r in nones)
+        refused = sum(r[key] == "refused" for r in rows)
+        print(f"  {key} s: named {named}/{len(effect_rows)}, false alarms {false}/{len(nones)}, refused {refused}")
     for label, held in (("held over every cut", True), ("changed with a cut", False)):
-        named_rows = [r for r in rows if r[keys[0]] != "none" and (len({r[k] for k in keys}) == 1) == held]
+        named_rows = [
+            r for r in rows if r[keys[0]] not in ("none", "refused") and (len({r[k] for k in keys}) == 1) == held
+        ]
         right = sum(r[keys[0]] == r["effect"] for r in named_rows)
         print(f"  a cause named on the whole record that {label}: right {right}/{len(named_rows)}")
     cpu = [float(r[f"cpu {c:g}"]) for r in rows for c in (0.0, *cuts)]  # type: ignore[arg-type]
@@ -73,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--set", default="tuning", help=f"comma-separated, of {', '.join(SETS)}")
     parser.add_argument("--duration", type=float, default=100.0, metavar="S")
-    parser.add_argument("--cuts", default="7,14", help="seconds cut from the start, comma-separated")
+    parser.add_argument("--cuts", default="7,14", help="seconds cut from the start (or the end), comma-separated")
     parser.add_argument("--from-end", action="store_true", help="cut the end of each record, not its start")
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--only", help="run only cases whose name contains this text")

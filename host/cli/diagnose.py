@@ -61,6 +61,10 @@ def run(args: argparse.Namespace) -> int:
     if args.train or args.test:
         if not (args.train and args.test) or args.data:
             raise DataError("cross-run diagnosis takes --train A.csv and at least one --test B.csv, and no DATA.csv")
+        if args.stability:
+            raise DataError(
+                "--stability checks one recording (pmactl diagnose DATA.csv --stability), not --train/--test"
+            )
         return _cross_run(args, say, progress)
     if not args.data:
         raise DataError("name a recording (pmactl diagnose DATA.csv) or use --train A.csv --test B.csv")
@@ -83,7 +87,8 @@ def run(args: argparse.Namespace) -> int:
     stability = cast("dict[str, object] | None", conf.get("stability"))
     if stability is not None:
         shortened = ", ".join(f"{k.replace('_', ' ')} -> {v}" for k, v in stability.items() if k != "holds")
-        say(f"  stability: {'holds' if stability['holds'] else 'BORDERLINE'} ({shortened})")
+        state = {True: "holds", False: "BORDERLINE", None: "not checked"}[stability["holds"]]  # type: ignore[index]
+        say(f"  stability: {state} ({shortened})")
     say(
         f"  held-out RMSE: baseline {result.baseline_rmse:.4g}, extended {result.extended_rmse:.4g} "
         f"(gain {result.gain:.0%}); noise floor {conf['noise_floor']:.3g}"
