@@ -87,7 +87,8 @@ def run(args: argparse.Namespace) -> int:
     stability = cast("dict[str, object] | None", conf.get("stability"))
     if stability is not None:
         shortened = ", ".join(f"{k.replace('_', ' ')} -> {v}" for k, v in stability.items() if k != "holds")
-        state = {True: "holds", False: "BORDERLINE", None: "not checked"}[stability["holds"]]  # type: ignore[index]
+        holds = stability["holds"]
+        state = "not checked" if holds is None else "holds" if holds else "BORDERLINE"
         say(f"  stability: {state} ({shortened})")
     say(
         f"  held-out RMSE: baseline {result.baseline_rmse:.4g}, extended {result.extended_rmse:.4g} "

@@ -27,8 +27,9 @@ END_SHARES = (0.1, 0.2)
 
 def diagnose_with_stability(m: Measurement, *, folds: int = 4, progress: bool | None = None) -> Diagnosis:
     """:func:`host.diagnose.run.diagnose` of ``m``, repeated without the last 10 % and 20 % of
-    it; ``confidence["stability"]`` holds each shortened record's verdict and ``holds`` (True,
-    False, or None when a shortened record could not be diagnosed), and the reason says so.
+    it; ``confidence["stability"]`` holds each shortened record's verdict and ``holds``: False
+    when one differs, None when none differs but one could not be diagnosed, else True; the
+    reason says which.
 
     A long record is decimated once, before it is cut, so that all three diagnoses run at one
     sampling rate (decimating each on its own would compare a half-rate whole record with
@@ -49,7 +50,8 @@ def diagnose_with_stability(m: Measurement, *, folds: int = 4, progress: bool | 
         except DataError as refusal:  # too short for these folds once shortened: not evidence either way
             shortened[key] = "not checked"
             refusals.append(f"without the last {share:.0%}: {refusal}")
-    holds = None if refusals else all(cause == whole.cause for cause in shortened.values())
+    checked = [cause for cause in shortened.values() if cause != "not checked"]
+    holds: bool | None = False if any(cause != whole.cause for cause in checked) else (None if refusals else True)
     whole.confidence["stability"] = {**shortened, "holds": holds}
     shares = " and ".join(f"{share:.0%}" for share in END_SHARES)
     if holds is None:
