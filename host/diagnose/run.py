@@ -163,6 +163,16 @@ def decimated(m: Measurement, limit: int = MAX_WORK_SAMPLES) -> tuple[Measuremen
     return out, note
 
 
+def decimated_with_warning(m: Measurement) -> tuple[Measurement, list[str]]:
+    """:func:`decimated`, warning once (:class:`DecimatedWarning`) when it decimates; also
+    returns the note for the diagnosis' ``notes``."""
+    m, note = decimated(m)
+    if not note:
+        return m, []
+    warnings.warn(note, DecimatedWarning, stacklevel=3)
+    return m, [note]
+
+
 def prepare(m: Measurement, levels: int) -> tuple[Context, int]:
     """Validate the record and compute the features shared by every fold."""
     if len(m) < MIN_SAMPLES:
@@ -235,11 +245,7 @@ def diagnose(
 ) -> Diagnosis:
     """Run the diagnosis (see module docstring). ``progress``: a tqdm line on stderr (None: when
     stderr is a terminal)."""
-    notes: list[str] = []
-    m, note = decimated(m)
-    if note:
-        warnings.warn(note, DecimatedWarning, stacklevel=2)
-        notes.append(note)
+    m, notes = decimated_with_warning(m)
     threads = 1 if len(m) * (levels + 1) * (levels + 2) // 2 < LARGE_PROBLEM_CELLS else 2
     with threadpool_limits(limits=threads):
         return _diagnose(m, folds, blocks_per_fold, levels, progress, notes)

@@ -16,11 +16,9 @@ Costs one diagnosis per share.
 
 from __future__ import annotations
 
-import warnings
-
 from edge.errors import DataError
 from host.data import Measurement
-from host.diagnose.run import DecimatedWarning, Diagnosis, decimated, diagnose
+from host.diagnose.run import Diagnosis, decimated_with_warning, diagnose
 
 END_SHARES = (0.1, 0.2)
 
@@ -34,12 +32,9 @@ def diagnose_with_stability(m: Measurement, *, folds: int = 4, progress: bool | 
     A long record is decimated once, before it is cut, so that all three diagnoses run at one
     sampling rate (decimating each on its own would compare a half-rate whole record with
     full-rate cuts just above the limit)."""
-    m, note = decimated(m)
-    if note:
-        warnings.warn(note, DecimatedWarning, stacklevel=2)
+    m, notes = decimated_with_warning(m)
     whole = diagnose(m, folds=folds, progress=progress)
-    if note:
-        whole.notes.insert(0, note)
+    whole.notes[:0] = notes
     shortened: dict[str, object] = {}
     refusals: list[str] = []
     for share in END_SHARES:
