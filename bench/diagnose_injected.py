@@ -17,7 +17,6 @@ import argparse
 import json
 import sys
 import time
-from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
@@ -75,18 +74,10 @@ def score(cases: list[InjectedCase], data: Path) -> list[dict[str, Any]]:
 
 def table(rows: list[dict[str, Any]]) -> None:
     """Injected effects named / total per effect and kind; the un-injected verdicts on their own."""
+    from bench.diagnose_scorecard import named_table
+
     print("\n## Injected effects named / total")
-    by: dict[tuple[str, str], list[bool]] = defaultdict(list)
-    for r in rows:
-        if r["effect"] != "none":
-            by[(r["effect"], r["kind"])].append(r["verdict"] == r["effect"])
-            by[(r["effect"], "all")].append(r["verdict"] == r["effect"])
-    kinds = [*sorted({r["kind"] for r in rows}), "all"]
-    print(f"| effect | {' | '.join(kinds)} |")
-    print("|---|" + "---|" * len(kinds))
-    for effect in sorted({e for e, _ in by}):
-        cells = [f"{sum(by[(effect, k)])}/{len(by[(effect, k)])}" if by[(effect, k)] else "-" for k in kinds]
-        print(f"| {effect} | {' | '.join(cells)} |")
+    named_table(rows, lambda r: [r["kind"], "all"])
     injected = [r for r in rows if r["effect"] != "none"]
     named = [r for r in injected if r["verdict"] == r["effect"]]
     cpu = [r["cpu_s"] for r in rows]

@@ -23,8 +23,9 @@ import sys
 import time
 import warnings
 from collections import defaultdict
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -91,18 +92,27 @@ def score(
     return rows
 
 
+def named_table(rows: Sequence[Mapping[str, Any]], columns_of: Callable[[Mapping[str, Any]], list[str]]) -> None:
+    """A Markdown table of the effects named / total: a row per effect, a column per label that
+    ``columns_of`` gives each record (its plant; or its kind and "all"), in sorted order."""
+    by: dict[tuple[str, str], list[bool]] = defaultdict(list)
+    labels: dict[str, None] = {}
+    for r in rows:
+        for label in columns_of(r):
+            labels[label] = None
+            if r["effect"] != "none":
+                by[(str(r["effect"]), label)].append(r["verdict"] == r["effect"])
+    columns = sorted(labels, key=lambda label: (label == "all", label))
+    print(f"| effect | {' | '.join(columns)} |")
+    print("|---|" + "---|" * len(columns))
+    for effect in sorted({e for e, _ in by}):
+        cells = [f"{sum(by[(effect, c)])}/{len(by[(effect, c)])}" if by[(effect, c)] else "-" for c in columns]
+        print(f"| {effect} | {' | '.join(cells)} |")
+
+
 def table(title: str, rows: list[dict[str, object]]) -> None:
     print(f"\n## {title}")
-    by: dict[tuple[str, str], list[bool]] = defaultdict(list)
-    for r in rows:
-        if r["effect"] != "none":
-            by[(str(r["effect"]), str(r["plant"]))].append(r["verdict"] == r["effect"])
-    plants = sorted({str(r["plant"]) for r in rows})
-    print(f"| effect | {' | '.join(plants)} |")
-    print("|---|" + "---|" * len(plants))
-    for effect in sorted({e for e, _ in by}):
-        cells = [f"{sum(by[(effect, p)])}/{len(by[(effect, p)])}" if by[(effect, p)] else "-" for p in plants]
-        print(f"| {effect} | {' | '.join(cells)} |")
+    named_table(rows, lambda r: [str(r["plant"])])
     effect_rows = [r for r in rows if r["effect"] != "none"]
     named = [r for r in effect_rows if r["verdict"] == r["effect"]]
     nones = [r for r in rows if r["effect"] == "none"]
