@@ -70,18 +70,23 @@ def test_inverse_by_swapping_pairs_is_exact(seed):
 
 
 @st.composite
-def spread_dpi(draw: st.DrawFn, asymmetry: float) -> DPIModel:
+def spread_dpi(draw: st.DrawFn, asymmetry: float, width_asymmetry: float) -> DPIModel:
     """Digit slopes spread over 600x between digits (0.15..93, like identified models with floored
-    digits), each digit's contraction pair within ``asymmetry`` of its expansion pair."""
+    digits), each digit's contraction height within ``asymmetry`` of its expansion height and its
+    contraction width within ``width_asymmetry`` of its expansion width."""
     n = draw(st.integers(2, 25))
     log_slope = st.floats(np.log(0.15), np.log(93.0))
-    log_ratio = st.floats(-np.log(asymmetry), np.log(asymmetry))
     dxe = np.array(draw(st.lists(st.floats(0.05, 0.5), min_size=n, max_size=n)))
     dye = dxe * np.exp(draw(st.lists(log_slope, min_size=n, max_size=n)))
-    dxc = dxe * np.exp(draw(st.lists(log_ratio, min_size=n, max_size=n)))
-    dyc = dye * np.exp(draw(st.lists(log_ratio, min_size=n, max_size=n)))
+    dxc = dxe * np.exp(draw(st.lists(log_ratio(width_asymmetry), min_size=n, max_size=n)))
+    dyc = dye * np.exp(draw(st.lists(log_ratio(asymmetry), min_size=n, max_size=n)))
     x0, y0 = draw(st.floats(-10, 10)), draw(st.floats(-100, 100))
     return DPIModel(dxe, dye, dxc, dyc, x0=x0, y0=y0)
+
+
+def log_ratio(asymmetry: float) -> st.SearchStrategy[float]:
+    """A log ratio within ``asymmetry`` either way (exactly 0 when ``asymmetry`` is 1)."""
+    return st.floats(-np.log(asymmetry), np.log(asymmetry))
 
 
 def assert_round_trip(model: DPIModel, seed: int, step: float, bound: float) -> None:
@@ -95,7 +100,7 @@ def assert_round_trip(model: DPIModel, seed: int, step: float, bound: float) -> 
 
 
 @settings(max_examples=25, deadline=None)
-@given(spread_dpi(3.0), seeds, st.floats(0.01, 0.3))
+@given(spread_dpi(3.0, 3.0), seeds, st.floats(0.01, 0.3))
 def test_inverse_undoes_forward_over_long_histories_with_spread_slopes(model, seed, step):
     """Rounding level, however far apart the slopes of different digits are: the per-digit
     asymmetry, not the spread, sets the conditioning (module docstring; 300 draws: <= 2e-13)."""
@@ -103,11 +108,14 @@ def test_inverse_undoes_forward_over_long_histories_with_spread_slopes(model, se
 
 
 @settings(max_examples=25, deadline=None)
-@given(spread_dpi(10.0), seeds, st.floats(0.01, 0.3))
+@given(spread_dpi(10.0, 1.0), seeds, st.floats(0.01, 0.3))
 def test_inverse_undoes_forward_at_the_asymmetry_the_fit_allows(model, seed, step):
-    """At the identification's default bound (max_asymmetry=10) rounding can grow at reversals,
-    but stays far below a DAC step (300 draws: median 2e-14, max 5e-10 of the range)."""
-    assert_round_trip(model, seed, step, 1e-8)
+    """At the identification's default bound (``dYc_i / dYe_i`` within 10, equal digit widths as
+    every identified model has) rounding can grow at reversals, but stays far below a DAC step
+    (2.4e-4 of the range at 12 bits). 6200 uniform draws of this generator: median 2e-13,
+    99.9th percentile 1.6e-8, max 5.7e-6 of the range (a bound of 1e-8 failed about one run in
+    30). Unequal widths multiply the factor (:mod:`edge.hysteresis.dpi`); no fit makes them."""
+    assert_round_trip(model, seed, step, 1e-5)
 
 
 def test_drift_is_bounded_with_the_compensator_and_grows_without():
