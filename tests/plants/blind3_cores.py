@@ -80,7 +80,11 @@ def position_sensor(x: Array, dt_s: float, p: dict[str, float]) -> Array:
     wave = np.sin(2.0 * np.pi * p["inl_cycles"] * s + p["inl_phase"]) - math.sin(p["inl_phase"])
     inl = p["inl_bow_mm"] * 4.0 * s * (1.0 - s) + p["inl_wave_mm"] * wave
     t = np.arange(x.size, dtype=np.float64) * dt_s
-    hum = p["hum_mm"] * (1.0 + 0.3 * np.sin(2.0 * np.pi * t / 17.0)) * np.sin(2.0 * np.pi * p["hum_hz"] * t + p["hum_phase"])
+    hum = (
+        p["hum_mm"]
+        * (1.0 + 0.3 * np.sin(2.0 * np.pi * t / 17.0))
+        * np.sin(2.0 * np.pi * p["hum_hz"] * t + p["hum_phase"])
+    )
     return np.asarray(x + inl + hum, dtype=np.float64)
 
 
@@ -285,7 +289,7 @@ def draw_params(core: str, rng: np.random.Generator, peak: float) -> dict[str, f
     """Plausible parameters for ``core`` at supply range ``peak`` [bar]: stroke span ~15-45 mm,
     a loop 3-20 % of the span wide."""
     if core == "bistable_bellows":
-        g = {**_rig(rng, peak, 6.0, 16.0, 0.08, 0.25)}
+        g = {**_rig(rng, peak, 6.0, 16.0, 0.2, 0.4)}  # a polymer bellows damps its snaps
         n = int(rng.integers(30, 51))
         stroke = rng.uniform(18.0, 35.0)  # mm, all folds open
         f_lo, f_hi = rng.uniform(15.0, 30.0), rng.uniform(90.0, 160.0)  # N
@@ -349,7 +353,7 @@ def draw_params(core: str, rng: np.random.Generator, peak: float) -> dict[str, f
             "k_a_n_bar_mm": ka,
             "k_spring_n_mm": ks,
             "f_kinetic_n": fk,
-            "f_static_n": fk * rng.uniform(1.08, 1.25),
+            "f_static_n": fk * rng.uniform(1.03, 1.1),
             "v_eps_mm_s": rng.uniform(0.3, 1.0),
             "k0_n_mm": ks,
             "k1_n_mm": peak * ka,

@@ -136,7 +136,7 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
         }
     if form == "rate_state_seal":  # strength scale; direct (a) and evolution (b) terms; v0; slip memory
         return {
-            "seal_mm": rng.uniform(2.0, 4.0),
+            "seal_mm": rng.uniform(3.0, 5.0),
             "a": 1.0,
             "b": rng.uniform(0.3, 0.7),
             "v0_mm_s": rng.uniform(20.0, 60.0),
@@ -159,11 +159,20 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
             **{f"w{k}": float(w[k]) for k in range(4)},
         }
     if form == "erlang_line":  # tube length [m]; dispersion [s/m^2]; Erlang stages
-        return {"length_m": rng.uniform(4.0, 15.0), "disp_s_m2": rng.uniform(1.5e-4, 3e-4), "stages": float(rng.integers(3, 7))}
+        return {
+            "length_m": rng.uniform(4.0, 15.0),
+            "disp_s_m2": rng.uniform(1.5e-4, 3e-4),
+            "stages": float(rng.integers(3, 7)),
+        }
     if form == "sinc3_adc":  # conversion period [s] (group delay 1.5 x); phase of the conversions
         return {"conversion_s": rng.uniform(0.012, 0.03), "phase": rng.uniform(0.0, 1.0)}
     if form == "hertz_pad":  # pad radius [mm], effective modulus [MPa], preload [N]
-        return {"pad_scale": 1.0, "radius_mm": rng.uniform(5.0, 15.0), "modulus_mpa": rng.uniform(3.0, 10.0), "preload_n": rng.uniform(5.0, 20.0)}
+        return {
+            "pad_scale": 1.0,
+            "radius_mm": rng.uniform(4.0, 10.0),
+            "modulus_mpa": rng.uniform(2.0, 6.0),
+            "preload_n": rng.uniform(2.0, 8.0),
+        }
     if form == "eccentric_bow":  # payload offset [mm]; muscle length [mm]; lateral stiffness vented [N/mm], per bar
         return {
             "eccentricity_mm": rng.uniform(20.0, 40.0),
@@ -171,15 +180,20 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
             "k_lat0_n_mm": rng.uniform(0.05, 0.15),
             "k_lat1_n_mm_bar": rng.uniform(0.1, 0.3),
         }
-    if form == "regulator_span":  # span drift [1/K], its curvature [1/K^2], regulator body lag [s]
+    if form == "regulator_span":  # span drift [1/K] (bridge and amplifier), its curvature [1/K^2], body lag [s]
         return {
             "span_scale": 1.0,
-            "tcs_per_k": -rng.uniform(0.0025, 0.005),
+            "tcs_per_k": -rng.uniform(0.004, 0.007),
             "tcs2_per_k2": rng.uniform(-1.5e-4, 1.5e-4),
             "tau_s": rng.uniform(5.0, 20.0),
         }
     if form == "hall_magnet":  # gap at rest [mm]; magnet + Hall coefficient [1/K]; magnet lag [s]
-        return {"tc_scale": 1.0, "gap_mm": rng.uniform(30.0, 60.0), "tc_per_k": -rng.uniform(0.0035, 0.006), "tau_s": rng.uniform(8.0, 25.0)}
+        return {
+            "tc_scale": 1.0,
+            "gap_mm": rng.uniform(30.0, 60.0),
+            "tc_per_k": -rng.uniform(0.0035, 0.006),
+            "tau_s": rng.uniform(8.0, 25.0),
+        }
     if effect == "none":
         return {}
     raise KeyError(f"unknown form {effect}:{form}; known: {BLIND3_FORMS}")
@@ -316,7 +330,8 @@ def render(
     off), read through :func:`~tests.plants.blind3_cores.position_sensor`.
 
     ``base`` is the effect-free core output (computed when not given): the output-side forms
-    start from it and take their scale from its span.
+    start from it and take their scale from its span. The load and temperature forms act
+    through the change of their column since the record's start (the plant as identified then).
     """
     peak = params["peak"]
     if form in INPUT_SIDE:
@@ -330,14 +345,22 @@ def render(
         x = x - q["creep_share"] * span * _norton_bailey(v, dt_s, q)
     elif form == "schapery_bladder":
         x = x - q["creep_share"] * span * _schapery(v, dt_s, q)
-    elif form == "hertz_pad":
+    elif form == "hertz_pad":  # relative to the payload at the start: the plant as identified at tare
         compliance = q["pad_scale"] * (9.0 / (16.0 * q["radius_mm"] * q["modulus_mpa"] ** 2)) ** (1.0 / 3.0)
-        tension = q["preload_n"] + stiffness_n_mm(u, params) * np.clip(x, 0.0, None)  # N: the muscle's own pull
-        x = x - compliance * ((tension + G_MS2 * load) ** (2.0 / 3.0) - tension ** (2.0 / 3.0))
+        tension = q["preload_n"] + 0.2 * stiffness_n_mm(u, params) * np.clip(x, 0.0, None)  # N: share of the pull
+
+        def squeeze(kg: Array | float) -> Array:
+            return np.asarray(compliance * ((tension + G_MS2 * kg) ** (2.0 / 3.0) - tension ** (2.0 / 3.0)))
+
+        x = x - (squeeze(load) - squeeze(float(load[0])))
     elif form == "eccentric_bow":
         k_lat = q["k_lat0_n_mm"] + q["k_lat1_n_mm_bar"] * np.clip(u, 0.0, None)
-        bow = np.minimum(1.5 * G_MS2 * load * q["eccentricity_mm"] / (q["length_mm"] * k_lat), 0.3 * q["length_mm"])
-        x = x - math.pi**2 * bow * bow / (4.0 * q["length_mm"])
+
+        def shortening(kg: Array | float) -> Array:
+            bow = np.minimum(1.5 * G_MS2 * kg * q["eccentricity_mm"] / (q["length_mm"] * k_lat), 0.3 * q["length_mm"])
+            return np.asarray(math.pi**2 * bow * bow / (4.0 * q["length_mm"]))
+
+        x = x - (shortening(load) - shortening(float(load[0])))
     elif form == "hall_magnet":
         magnet = lag(temperature, dt_s, q["tau_s"]) - temperature[0]
         field = np.maximum(1.0 + q["tc_scale"] * q["tc_per_k"] * magnet, 0.5)

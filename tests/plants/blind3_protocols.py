@@ -45,10 +45,10 @@ def schroeder_offset(duration_s: float, dt_s: float, peak: float, rng: np.random
 
 def speed_ladder(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """Full-range constant-rate ramps between 0.02-0.08 and 0.92-1 ``peak`` at four speeds (log
-    spaced, 0.04-0.08 up to 0.8-1.6 ``peak``/s), 2-3 up-down cycles per speed, speeds in a random
+    spaced, 0.08-0.15 up to 1-2 ``peak``/s), 2-3 up-down cycles per speed, speeds in a random
     order per block, 0.2-1 s dwell at each end."""
     lo, hi = float(rng.uniform(0.02, 0.08)) * peak, float(rng.uniform(0.92, 1.0)) * peak
-    speeds = np.geomspace(rng.uniform(0.04, 0.08), rng.uniform(0.8, 1.6), 4) * peak
+    speeds = np.geomspace(rng.uniform(0.08, 0.15), rng.uniform(1.0, 2.0), 4) * peak
     knots_t, knots_u = [0.0], [lo]
     while knots_t[-1] < duration_s:
         for speed in rng.permutation(speeds):
@@ -125,7 +125,9 @@ def with_full_sweep(protocol: str, duration_s: float, dt_s: float, peak: float, 
     """0.6-1 s vented, a linear fill to 0.98-1 ``peak`` in 1.3-1.7 s, a 0.3-0.6 s hold, a linear
     vent to 0 in 1.3-1.7 s, a 0.5 s ramp to the protocol's first value, then ``protocol``
     [0..peak] to ``duration_s``."""
-    vented, rise, hold, fall = (float(rng.uniform(lo, hi)) for lo, hi in ((0.6, 1.0), (1.3, 1.7), (0.3, 0.6), (1.3, 1.7)))
+    vented, rise, hold, fall = (
+        float(rng.uniform(lo, hi)) for lo, hi in ((0.6, 1.0), (1.3, 1.7), (0.3, 0.6), (1.3, 1.7))
+    )
     top = float(rng.uniform(0.98, 1.0)) * peak
     lead_s = vented + rise + hold + fall + 0.5
     body = np.clip(BLIND3_PROTOCOLS[protocol](max(duration_s - lead_s, 0.0) + 1.0, dt_s, peak, rng), 0.0, peak)
