@@ -155,31 +155,34 @@ def muscle_stiffness(v: Array, x: Array, p: dict[str, float]) -> Array:
 
 
 def af_braid(u: Array, dt_s: float, p: dict[str, float]) -> Array:
-    """Contraction ``x = x_f - F / K_t`` [mm] with the braid friction ``F`` [N] elastic
-    (``dF = E dx``) inside ``|F - alpha| <= F_y`` and plastic on it (``dF = E H / (E + H) dx``,
-    ``H = C - g n alpha``, ``d alpha = dF``), where ``dx = dx_f K_t / (K_t + E_t)`` (the
-    friction in series with the balance); sub-steps of at most 0.05 mm; then the ringing."""
+    """Contraction ``x = x_f - N F / K_t`` [mm]: the braid friction is ``N F`` [N] with ``N = (0.05
+    + 0.95 v) / 0.525`` the fibres' normal force relative to mid pressure (it grows with the
+    pressure) and ``F`` the Armstrong-Frederick state at mid pressure, elastic (``dF = E dx``)
+    inside ``|F - alpha| <= F_y`` and plastic on it (``dF = E H / (E + H) dx``, ``H = C - g n
+    alpha``, ``d alpha = dF``), where ``dx = dx_f K_t / (K_t + N E_t)`` (the friction in series
+    with the balance); sub-steps of at most 0.05 mm; then the ringing."""
     v = np.clip(valve_line(u, dt_s, p) / p["peak"], 0.0, None)
     xf = free_contraction(v, p)
     kt = muscle_stiffness(v, xf, p)
+    normal = (0.05 + 0.95 * v) / 0.525
     e, fy, c, g = p["e_n_mm"], p["f_yield_n"], p["c_n_mm"], p["g_per_mm"]
     force, alpha, last = 0.0, 0.0, float(xf[0])
     out = np.empty_like(xf)
-    for i, (target, k) in enumerate(zip(xf.tolist(), kt.tolist())):
+    for i, (target, k, nr) in enumerate(zip(xf.tolist(), kt.tolist(), normal.tolist())):
         n_sub = 1 + int(abs(target - last) / 0.05)
         step = (target - last) / n_sub
         for _ in range(n_sub):
-            trial = force + e * k / (k + e) * step
+            trial = force + e * k / (k + nr * e) * step
             if abs(trial - alpha) <= fy:
                 force = trial
             else:
                 n = 1.0 if trial > alpha else -1.0
                 h = max(c - g * n * alpha, 1e-9)
                 tangent = e * h / (e + h)
-                alpha += tangent * k / (k + tangent) * step
+                alpha += tangent * k / (k + nr * tangent) * step
                 force = alpha + n * fy
         last = target
-        out[i] = target - force / k
+        out[i] = target - nr * force / k
     return ringing(out, dt_s, p["f_res_hz"], p["zeta"])
 
 
