@@ -160,7 +160,8 @@ def af_braid(u: Array, dt_s: float, p: dict[str, float]) -> Array:
     pressure) and ``F`` the Armstrong-Frederick state at mid pressure, elastic (``dF = E dx``)
     inside ``|F - alpha| <= F_y`` and plastic on it (``dF = E H / (E + H) dx``, ``H = C - g n
     alpha``, ``d alpha = dF``), where ``dx = dx_f K_t / (K_t + N E_t)`` (the friction in series
-    with the balance); sub-steps of at most 0.05 mm; then the ringing."""
+    with the balance); sub-steps of at most 0.05 mm; then the ringing, which cannot take the
+    payload below its rest stop (0 mm)."""
     v = np.clip(valve_line(u, dt_s, p) / p["peak"], 0.0, None)
     xf = free_contraction(v, p)
     kt = muscle_stiffness(v, xf, p)
@@ -183,7 +184,7 @@ def af_braid(u: Array, dt_s: float, p: dict[str, float]) -> Array:
                 force = alpha + n * fy
         last = target
         out[i] = target - nr * force / k
-    return ringing(out, dt_s, p["f_res_hz"], p["zeta"])
+    return np.maximum(ringing(out, dt_s, p["f_res_hz"], p["zeta"]), 0.0)  # the payload rests on its stop
 
 
 # ---- textile sleeve: slack then taut, Dahl friction on contact ----------------------------------
