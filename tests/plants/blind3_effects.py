@@ -175,10 +175,10 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
         }
     if form == "eccentric_bow":  # payload offset [mm]; muscle length [mm]; lateral stiffness vented [N/mm], per bar
         return {
-            "eccentricity_mm": rng.uniform(20.0, 40.0),
+            "eccentricity_mm": rng.uniform(35.0, 60.0),
             "length_mm": rng.uniform(250.0, 400.0),
-            "k_lat0_n_mm": rng.uniform(0.05, 0.15),
-            "k_lat1_n_mm_bar": rng.uniform(0.1, 0.3),
+            "k_lat0_n_mm": rng.uniform(0.2, 0.4),
+            "k_lat1_n_mm_bar": rng.uniform(0.1, 0.25),
         }
     if form == "regulator_span":  # span drift [1/K] (bridge and amplifier), its curvature [1/K^2], body lag [s]
         return {
