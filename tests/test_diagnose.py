@@ -16,7 +16,7 @@ from edge.errors import DataError
 from hil.record import record, write_recording
 from host.cli import main
 from host.data import Measurement, load_measurement
-from host.diagnose.decide import CandidateScore, choose
+from host.diagnose.decide import CandidateScore, choose, distinct
 from host.diagnose.run import CAUSES, DecimatedWarning, decimated, diagnose
 
 
@@ -29,23 +29,23 @@ def scored(cause: str, gains: list[float], base: float = 1.0) -> CandidateScore:
 
 def verdict(noise: float = 0.0, **gains: list[float]):
     scores = {c: scored(c, gains.get(c, [0.0, 0.001, -0.001, 0.0])) for c in CAUSES}
-    return choose(scores, noise)
+    return distinct(choose(scores, noise), scores)
 
 
 def test_a_consistent_gain_is_named_with_its_margins():
-    v = verdict(creep=[0.20, 0.25, 0.22, 0.18], transport_delay=[0.05, 0.06, 0.04, 0.05])
+    v = verdict(creep=[0.40, 0.45, 0.42, 0.38], transport_delay=[0.05, 0.06, 0.04, 0.05])
     assert v.cause == "creep"
     assert v.confidence["runner_up"] == "transport_delay"
-    assert v.confidence["over_runner_up"] == pytest.approx(0.2125 - 0.05)
+    assert v.confidence["over_runner_up"] == pytest.approx(0.4125 - 0.05)
     assert v.confidence["over_threshold"] > 0
 
 
 def test_gains_the_folds_do_not_agree_on_are_not_evidence():
-    v = verdict(creep=[0.60, -0.05, 0.02, 0.03])  # one lucky fold: mean 15 %, spread 30 %
+    v = verdict(creep=[1.24, -0.08, -0.08, -0.04])  # one lucky fold: mean 26 %, spread 65 %
     assert v.cause == "none" and "do not agree" in v.reason
-    v = verdict(creep=[0.30, 0.28, -0.15, 0.31])  # one part of the record contradicts it
+    v = verdict(creep=[0.50, 0.48, -0.15, 0.51])  # one part of the record contradicts it
     assert v.cause == "none" and "contradicts" in v.reason
-    v = verdict(creep=[0.05, 0.06, 0.07, 0.05])  # consistent but below the calibrated floor
+    v = verdict(creep=[0.15, 0.16, 0.17, 0.15])  # consistent but below the calibrated floor
     assert v.cause == "none" and "below" in v.reason
     assert v.confidence["over_threshold"] < 0
 
@@ -58,29 +58,33 @@ def test_a_fit_that_blows_up_on_a_fold_is_a_failed_fit_not_evidence_against():
 
 
 def test_a_gain_at_the_noise_floor_is_not_evidence():
-    gains = [0.10, 0.11, 0.10, 0.105]  # +10 % of a baseline already at 1.0, with noise 0.5
+    # +30 % of a baseline at 1.0 with a noise floor of 1.5 (as an overestimated floor can be:
+    # above the floor, a gain of GAIN_FLOOR is also a reduction of more than NOISE_SHARE x noise)
+    gains = [0.30, 0.31, 0.30, 0.305]
     assert verdict(noise=0.0, rate_dependence=gains).cause == "rate_dependence"
-    v = verdict(noise=0.5, rate_dependence=gains)
+    v = verdict(noise=1.5, rate_dependence=gains)
     assert v.cause == "none" and "noise floor" in v.reason
 
 
 def test_an_observed_cause_must_beat_a_slow_drift_of_the_same_flexibility():
-    drift = [0.14, 0.16, 0.15, 0.13]
-    v = verdict(temperature_drift=[0.15, 0.16, 0.15, 0.14], slow_drift=drift)
-    assert v.cause == "slow_drift"
-    v = verdict(temperature_drift=[0.35, 0.36, 0.30, 0.33], slow_drift=drift)
+    drift = [0.34, 0.36, 0.35, 0.33]
+    v = verdict(temperature_drift=[0.35, 0.36, 0.35, 0.34], slow_drift=drift)
+    # nor is it a drift no column explains: the record cannot tell the two apart
+    assert v.cause == "none" and "cannot tell slow_drift" in v.reason
+    assert v.confidence["undecided_between"] == ["slow_drift", "temperature_drift"]
+    v = verdict(temperature_drift=[0.55, 0.56, 0.50, 0.53], slow_drift=drift)
     assert v.cause == "temperature_drift" and "slow drift" in v.decided_by
 
 
 def test_a_drift_that_shifted_copies_of_time_explain_as_well_is_not_named():
-    drift = [0.14, 0.16, 0.15, 0.13]
+    drift = [0.34, 0.36, 0.35, 0.33]
     scores = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}
     scores["slow_drift"] = scored("slow_drift", drift)
-    scores["slow_drift"].null_gains = [0.02, 0.05, 0.16, -0.1, 0.0, 0.03, 0.01, 0.04, 0.02]
+    scores["slow_drift"].null_gains = [0.02, 0.05, 0.36, -0.1, 0.0, 0.03, 0.01, 0.04, 0.02]
     v = choose(scores, 0.0)
     assert v.cause == "none" and "every shifted copy of the ramp in time" in v.reason
     assert v.confidence["surrogate_p"] == {"slow_drift": pytest.approx(0.2)}
-    scores["slow_drift"].null_gains = [0.02, 0.05, 0.1, -0.1, 0.0, 0.03, 0.01, 0.04, 0.02]
+    scores["slow_drift"].null_gains = [0.02, 0.05, 0.3, -0.1, 0.0, 0.03, 0.01, 0.04, 0.02]
     assert choose(scores, 0.0).cause == "slow_drift"
 
 
@@ -89,21 +93,21 @@ def test_the_drift_null_is_asked_for_only_when_the_drift_would_be_named():
 
     scores = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}
     assert not drift_would_be_named(scores, 0.0)  # the drift does not pass
-    scores["slow_drift"] = scored("slow_drift", [0.14, 0.16, 0.15, 0.13])
+    scores["slow_drift"] = scored("slow_drift", [0.34, 0.36, 0.35, 0.33])
     assert drift_would_be_named(scores, 0.0)
-    scores["creep"] = scored("creep", [0.30, 0.28, 0.31, 0.29])  # a physical cause passes: it wins
+    scores["creep"] = scored("creep", [0.50, 0.48, 0.51, 0.49])  # a physical cause passes: it wins
     assert not drift_would_be_named(scores, 0.0) and choose(scores, 0.0).cause == "creep"
 
 
 def test_the_drift_yardstick_ignores_folds_where_either_fit_failed_and_needs_two_folds():
     from host.diagnose.decide import why_not
 
-    load = scored("load_dependence", [0.15, 0.14, 0.16])
-    drift = scored("slow_drift", [0.20, -4.0, 0.21])  # the drift blew up on fold 2
+    load = scored("load_dependence", [0.35, 0.34, 0.36])
+    drift = scored("slow_drift", [0.40, -4.0, 0.41])  # the drift blew up on fold 2
     reason = why_not(load, 0.0, drift)  # behind the drift on both folds where both fits held
     assert reason is not None and "slow drift" in reason
     one_fold = {c: scored(c, [0.0, 0.001]) for c in CAUSES}
-    one_fold["creep"] = scored("creep", [0.30, -9.0])  # one valid fold of two
+    one_fold["creep"] = scored("creep", [0.50, -9.0])  # one valid fold of two
     v = choose(one_fold, 0.0)
     assert v.cause == "none" and "fewer than two folds" in v.reason
 
@@ -118,12 +122,13 @@ def test_non_finite_numbers_become_null_in_the_json():
 
 
 def test_a_temperature_that_follows_time_is_named_with_the_confound():
-    drift = [0.14, 0.16, 0.15, 0.13]
+    drift = [0.34, 0.36, 0.35, 0.33]
     scores = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}
     scores["slow_drift"] = scored("slow_drift", drift)
-    scores["temperature_drift"] = scored("temperature_drift", [0.15, 0.16, 0.15, 0.14])
+    scores["temperature_drift"] = scored("temperature_drift", [0.35, 0.36, 0.35, 0.34])
     assert choose(scores, 0.0, {"temperature": 0.3}).cause == "slow_drift"
-    v = choose(scores, 0.0, {"temperature": 0.97})
+    assert distinct(choose(scores, 0.0, {"temperature": 0.3}), scores).cause == "none"  # cannot tell
+    v = distinct(choose(scores, 0.0, {"temperature": 0.97}), scores)  # the confound is the stated doubt
     assert v.cause == "temperature_drift" and "confounded" in v.decided_by and "r = +0.97" in v.reason
 
 
@@ -133,17 +138,18 @@ def test_observed_causes_do_not_win_by_rank_against_a_stronger_dynamic_cause():
 
 
 def test_a_rate_term_that_a_linear_lag_explains_as_well_is_not_rate_dependence():
-    rate = [0.18, 0.20, 0.17, 0.19]
-    v = verdict(rate_dependence=rate, output_lag=[0.17, 0.19, 0.16, 0.18])
+    rate = [0.38, 0.40, 0.37, 0.39]
+    v = verdict(rate_dependence=rate, output_lag=[0.37, 0.39, 0.36, 0.38])
     assert v.cause == "none" and "linear lag after the hysteresis explains as much" in v.reason
     assert "baseline's dynamics are incomplete" in v.reason  # the lag itself is reported, not named
     assert verdict(rate_dependence=rate, output_lag=[0.10, 0.11, 0.09, 0.12]).cause == "rate_dependence"
     assert verdict(output_lag=[0.30, 0.31, 0.29, 0.30]).cause == "none"  # a yardstick is never the verdict
 
 
-def test_a_speed_dependent_lag_that_ties_a_dead_time_is_read_as_rate_dependence():
+def test_a_speed_dependent_lag_that_ties_a_dead_time_is_not_a_verdict():
     tie = verdict(transport_delay=[0.40, 0.42, 0.41, 0.40], rate_dependence=[0.38, 0.40, 0.39, 0.37])
-    assert tie.cause == "rate_dependence" and "vanishes when the output stops" in tie.decided_by
+    assert tie.cause == "none" and "cannot tell transport_delay" in tie.reason
+    assert "vanishes when the output stops" in tie.reason  # what to record to separate them
     clear = verdict(transport_delay=[0.60, 0.62, 0.61, 0.60], rate_dependence=[0.30, 0.31, 0.29, 0.30])
     assert clear.cause == "transport_delay" and "persists" in clear.decided_by
 

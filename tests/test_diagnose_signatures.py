@@ -126,12 +126,12 @@ def test_a_signature_without_held_out_confirmation_names_nothing():
 
 
 def test_a_measured_column_must_beat_its_shifted_copies():
-    scores = scores_with(load_dependence=[0.21, 0.18, 0.19, 0.187])
-    scores["load_dependence"].null_gains = [0.05, 0.02, 0.22, 0.0, 0.01, 0.03, 0.04, -0.02, 0.06]
+    scores = scores_with(load_dependence=[0.41, 0.38, 0.39, 0.387])
+    scores["load_dependence"].null_gains = [0.05, 0.02, 0.42, 0.0, 0.01, 0.03, 0.04, -0.02, 0.06]
     v = choose(scores, 0.0)
     assert v.cause == "none" and "does not beat every shifted copy of its column" in v.reason
     assert v.confidence["surrogate_p"] == {"load_dependence": 0.2}
-    scores["load_dependence"].null_gains = [0.05, 0.02, 0.12, 0.0, 0.01, 0.03, 0.04, -0.02, 0.06]
+    scores["load_dependence"].null_gains = [0.05, 0.02, 0.32, 0.0, 0.01, 0.03, 0.04, -0.02, 0.06]
     v = choose(scores, 0.0)
     assert v.cause == "load_dependence" and "shifted copies" in v.decided_by
     assert isinstance(v, Verdict)

@@ -50,6 +50,7 @@ from host.diagnose.decide import (
     BLOWUP_RATIO,
     CandidateScore,
     choose,
+    distinct,
     drift_would_be_named,
     with_signatures,
 )
@@ -420,7 +421,7 @@ def _diagnose(
     time_correlation = {
         name: float(np.corrcoef(values, ctx.t)[0, 1]) for name, values in ctx.extras.items() if np.ptp(values) > 0
     }
-    verdict = with_signatures(choose(scores, noise, time_correlation), scores, found, noise)
+    verdict = distinct(with_signatures(choose(scores, noise, time_correlation), scores, found, noise), scores)
     cause = verdict.cause
     chosen = designs.get(cause) if cause != "none" else None
     extended_full = chosen.fit(ctx, np.ones(n, dtype=bool)) if chosen is not None else None
