@@ -278,3 +278,16 @@ def test_noise_floor_reads_the_white_noise_not_the_signal():
     rng = np.random.default_rng(0)
     t = np.arange(20_000) * 0.01
     assert noise_floor(20 * np.sin(0.3 * t) + rng.normal(0, 0.05, t.size)) == pytest.approx(0.05, rel=0.1)
+
+
+def test_a_cause_another_term_explains_as_well_is_not_named():
+    """Within DISTINCT_MARGIN of another term (a yardstick too) the record cannot tell them apart:
+    none, both named in the reason and the confidence, with what to record to separate them."""
+    creep = [0.40, 0.42, 0.41, 0.40]
+    v = verdict(creep=creep, load_dependence=[0.39, 0.41, 0.40, 0.38], output_lag=[0.38, 0.40, 0.39, 0.39])
+    assert v.cause == "none" and v.decided_by == "not distinct from load_dependence"
+    assert v.confidence["undecided_between"] == ["creep", "load_dependence", "output_lag"]
+    assert "cannot tell creep (+40.8%) from load_dependence (+39.5%)" in v.reason
+    assert "load and temperature varied independently" in v.reason  # the general advice for this pair
+    clear = verdict(creep=creep, load_dependence=[0.36, 0.38, 0.37, 0.36])  # 4 % behind: distinct
+    assert clear.cause == "creep"

@@ -383,8 +383,8 @@ def _rivals(best: str, scores: dict[str, CandidateScore]) -> list[str]:
 def distinct(verdict: Verdict, scores: dict[str, CandidateScore]) -> Verdict:
     """``verdict`` when its cause stands clear of every other term; else ``none``: the record
     cannot tell the cause from its closest rival, and both are reported with what to record to
-    separate them. (On the four plant families this turned 10 named verdicts into ``none``: 6
-    right, 3 wrong causes and 1 false alarm; a cause that is right 6 times in 10 is a guess.)"""
+    separate them. (On the four plant families this turned 9 named verdicts into ``none``: 5
+    right, 3 wrong causes and 1 false alarm; a cause that is right 5 times in 9 is a guess.)"""
     if verdict.cause == "none" or verdict.cause not in scores:
         return verdict
     rivals = _rivals(verdict.cause, scores)

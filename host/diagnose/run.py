@@ -429,7 +429,7 @@ def _diagnose(
     evidence["noise_floor"] = noise
     evidence["signatures"] = {c: g.as_json() for c, g in found.items()}
     reason = verdict.reason
-    if cause == "none":
+    if cause == "none" and verdict.decided_by == "no candidate passed":  # not when two terms tie
         whiteness = evidence["whiteness"]
         if whiteness["p_value"] < 0.01:  # type: ignore[index]
             reason += (
