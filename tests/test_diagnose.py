@@ -291,3 +291,20 @@ def test_a_cause_another_term_explains_as_well_is_not_named():
     assert "load and temperature varied independently" in v.reason  # the general advice for this pair
     clear = verdict(creep=creep, load_dependence=[0.36, 0.38, 0.37, 0.36])  # 4 % behind: distinct
     assert clear.cause == "creep"
+
+
+def test_only_terms_judged_as_the_cause_was_can_be_its_rivals():
+    """A term with one valid fold, or a column no better than its shifted copies, does not make a
+    named cause a tie; nor does the drift for a column that beat it on the shared rows."""
+    creep = [0.40, 0.42, 0.41, 0.40]
+    assert verdict(creep=creep, temperature_drift=[0.45, float("nan")]).cause == "creep"  # one fold
+    scores = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}
+    scores["creep"] = scored("creep", creep)
+    scores["load_dependence"] = scored("load_dependence", [0.40, 0.41, 0.40, 0.39])
+    scores["load_dependence"].null_gains = [0.45, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]  # p = 0.2
+    assert distinct(choose(scores, 0.0), scores).cause == "creep"
+    scores = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}
+    scores["load_dependence"] = scored("load_dependence", [0.40, 0.41, 0.40, 0.39])
+    scores["load_dependence"].drift_margins = [0.05, 0.04, 0.06, 0.05]  # ahead on the shared rows
+    scores["slow_drift"] = scored("slow_drift", [0.39, 0.40, 0.39, 0.38])
+    assert distinct(choose(scores, 0.0), scores).cause == "load_dependence"

@@ -135,3 +135,16 @@ def test_a_measured_column_must_beat_its_shifted_copies():
     v = choose(scores, 0.0)
     assert v.cause == "load_dependence" and "shifted copies" in v.decided_by
     assert isinstance(v, Verdict)
+
+
+def test_a_signature_verdict_that_another_term_explains_far_better_is_not_named():
+    """The two-stage rule may name a weak cause its signature nominates; when another term
+    explains the held-out error far better the evidence conflicts, and the reason says so."""
+    from host.diagnose.decide import distinct
+
+    scores = scores_with(load_dependence=[0.40, 0.41, 0.39, 0.40], creep=[0.10, 0.11, 0.09, 0.10])
+    nominated = with_signatures(choose(scores, 0.0), scores, {"creep": sig("creep", 0.001)}, 0.0)
+    assert nominated.cause == "creep"
+    v = distinct(nominated, scores)
+    assert v.cause == "none" and "explains the held-out error better" in v.reason
+    assert v.confidence["undecided_between"] == ["creep", "load_dependence"]

@@ -114,8 +114,9 @@ def test_inverse_undoes_forward_at_the_asymmetry_the_fit_allows(model, seed, ste
     every identified model has) rounding can grow at reversals, but stays far below a DAC step
     (2.4e-4 of the range at 12 bits). 6200 uniform draws of this generator: median 2e-13,
     99.9th percentile 1.6e-8, max 5.7e-6 of the range (a bound of 1e-8 failed about one run in
-    30). Unequal widths multiply the factor (:mod:`edge.hysteresis.dpi`); no fit makes them."""
-    assert_round_trip(model, seed, step, 1e-5)
+    30); the bound is 1e-4, under half a DAC step. Unequal widths multiply the factor
+    (:mod:`edge.hysteresis.dpi`); no fit makes them."""
+    assert_round_trip(model, seed, step, 1e-4)
 
 
 def test_drift_is_bounded_with_the_compensator_and_grows_without():

@@ -80,10 +80,15 @@ def run(args: argparse.Namespace) -> int:
     say(f"  {result.reason}")
     say(f"  decided by: {result.decided_by}")
     conf = result.confidence
-    say(
-        f"  confidence: {conf['over_threshold']:+.1%} over its threshold, {conf['over_runner_up']:+.1%} over the "
-        f"runner-up ({conf['runner_up']})"
-    )
+    undecided = cast("list[str] | None", conf.get("undecided_between"))
+    if undecided:  # a tie: the margins of the leading cause would read as confidence in it
+        tied = ", ".join(f"{c} {result.scores[c]:+.1%}" for c in undecided)
+        say(f"  undecided between: {tied}")
+    else:
+        say(
+            f"  confidence: {conf['over_threshold']:+.1%} over its threshold, {conf['over_runner_up']:+.1%} over "
+            f"the runner-up ({conf['runner_up']})"
+        )
     stability = cast("dict[str, object] | None", conf.get("stability"))
     if stability is not None:
         shortened = ", ".join(f"{k.replace('_', ' ')} -> {v}" for k, v in stability.items() if k != "holds")

@@ -34,7 +34,7 @@ from scipy.signal import lfilter
 from edge.errors import DataError
 from host.data import Measurement
 from host.diagnose.candidates import CREEP_TAUS_S, DELAYS_S, MIN_DELAY_SAMPLES
-from host.diagnose.decide import CandidateScore, why_not
+from host.diagnose.decide import CROSSRUN_GAIN_FLOOR, CandidateScore, why_not
 from host.diagnose.features import branch_offset, first_order, slow_part, smoothed_rate
 from host.diagnose.folds import holdout_masks, noise_floor
 from host.diagnose.hammerstein import FittedModel, _steady_state, fit_hammerstein, rmse
@@ -235,10 +235,11 @@ def cross_run(
 
 def _verdict(scores: dict[str, CandidateScore], noise: float) -> tuple[str, str]:
     """Session drift first; a richer correction only when it beats session drift by the calibrated test."""
-    passing = [c for c in CORRECTIONS if why_not(scores[c], noise, None) is None]
+    passing = [c for c in CORRECTIONS if why_not(scores[c], noise, None, floor=CROSSRUN_GAIN_FLOOR) is None]
     if not passing:
         best = max(CORRECTIONS, key=lambda c: scores[c].mean)
-        return "none", f"no correction passes: the best ({best}) does not because {why_not(scores[best], noise, None)}"
+        why = why_not(scores[best], noise, None, floor=CROSSRUN_GAIN_FLOOR)
+        return "none", f"no correction passes: the best ({best}) does not because {why}"
     drift = scores["session_drift"]
     richer = []
     for c in passing:
@@ -247,7 +248,7 @@ def _verdict(scores: dict[str, CandidateScore], noise: float) -> tuple[str, str]
         paired = CandidateScore(c)
         paired.gains = [a - b for a, b in zip(scores[c].gains, drift.gains)]
         paired.reductions = [1.0] * len(paired.gains)
-        if "session_drift" not in passing or why_not(paired, 0.0, None) is None:
+        if "session_drift" not in passing or why_not(paired, 0.0, None, floor=CROSSRUN_GAIN_FLOOR) is None:
             richer.append(c)
     pool = richer or passing
     best = max(pool, key=lambda c: scores[c].mean)

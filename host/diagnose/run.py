@@ -13,7 +13,8 @@
 3. :func:`host.diagnose.decide.choose` names the cause with calibrated evidence, or ``none``
    with the reason; :func:`host.diagnose.decide.with_signatures` then applies the two-stage rule:
    a residual signature (:mod:`host.diagnose.signatures`, surrogate-calibrated) nominates a cause
-   that the held-out gain confirms.
+   that the held-out gain confirms, and :func:`host.diagnose.decide.distinct` turns a cause that
+   another term explains as well into ``none`` ("cannot tell X from Y").
 
 Records longer than :data:`MAX_WORK_SAMPLES` are decimated (block means, an anti-alias filter)
 with a warning; BLAS threads are sized to the problem (small least-squares problems run fastest
