@@ -39,6 +39,7 @@ from tests.plants.blind2_cores import BLIND2_CORES, draw_params
 from tests.plants.blind2_effects import BLIND2_FORMS, INTENSITY_KEY, columns, draw_effect_params, render
 from tests.plants.blind2_protocols import BLIND2_PROTOCOLS, with_range_check
 from tests.plants.family import Case
+from tests.plants.recording import Sensors, case_table, recorded
 from tests.plants.visibility import visible_effect
 
 Array = NDArray[np.float64]
@@ -50,6 +51,8 @@ LOAD_READ_KG, LOAD_NOISE_KG = 0.005, 0.008
 TEMP_READ_K, TEMP_NOISE_K = 0.05, 0.03
 NONE_PER_PLANT = 5
 SEED_BASE = 12000
+# measurement noise seeded at case.seed + 70_000, independent of the plant draws
+SENSORS = Sensors(70_000, QUANT_MM, LOAD_NOISE_KG, LOAD_READ_KG, TEMP_NOISE_K, TEMP_READ_K)
 
 
 def blind2_cases(duration_s: float = 150.0) -> list[Case]:
@@ -93,21 +96,9 @@ def simulate(case: Case) -> dict[str, Any]:
     return {"t": t, "u": u, "on": on, "off": off, "load": load, "temperature": temperature, "truth": truth}
 
 
-def _read(x: Array, step: float) -> Array:
-    return np.asarray(np.round(x / step) * step, dtype=np.float64)
-
-
 def measurement_from(case: Case, sim: dict[str, Any]) -> tuple[Measurement, dict[str, Any]]:
-    """The recording of ``case`` from its :func:`simulate` result: output [mm] with noise,
-    read to :data:`QUANT_MM`; load [kg] and temperature [degC] with noise, read to their steps."""
-    rng = np.random.default_rng(case.seed + 70_000)  # measurement noise, independent of the plant draws
-    n = sim["on"].size
-    y = _read(sim["on"] + rng.normal(0.0, sim["truth"]["noise"], n), QUANT_MM)
-    extras = {
-        "load": _read(sim["load"] + rng.normal(0.0, LOAD_NOISE_KG, n), LOAD_READ_KG),
-        "temperature": _read(sim["temperature"] + rng.normal(0.0, TEMP_NOISE_K, n), TEMP_READ_K),
-    }
-    return Measurement(sim["t"], sim["u"], y, extras, source=case.name), dict(sim["truth"])
+    """The recording of ``case`` from its :func:`simulate` result (:data:`SENSORS`)."""
+    return recorded(case, sim, SENSORS)
 
 
 def blind2_measurement(case: Case) -> tuple[Measurement, dict[str, Any]]:
@@ -118,37 +109,7 @@ def blind2_measurement(case: Case) -> tuple[Measurement, dict[str, Any]]:
 
 def report_table(duration_s: float = 100.0) -> str:
     """A Markdown table of every case, a per-effect summary and the CPU seconds it took."""
-    import time
-
-    start = time.process_time()
-    rows = [
-        "| plant | effect:form | protocol | rate [Hz] | effect/noise | effect/span | rescale | load/temperature |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    per_effect: dict[str, list[tuple[float, float]]] = {}
-    cases = blind2_cases(duration_s)
-    for case in cases:
-        truth = simulate(case)["truth"]
-        if case.effect != "none":
-            ratios = (truth["effect_size_over_noise"], truth["effect_size_over_span"])
-            per_effect.setdefault(case.effect, []).append(ratios)
-        rows.append(
-            f"| {case.plant} | {case.effect}:{case.form} | {case.protocol} | {case.rate_hz:g} | "
-            f"{truth['effect_size_over_noise']:.1f} | {100 * truth['effect_size_over_span']:.1f} % | "
-            f"{truth['intensity_rescale']:.2f} | {truth['load_pattern']}/{truth['temperature_pattern']} |"
-        )
-    n_cases = len(rows) - 2
-    rows.append("\n| effect | effect/noise min | median | max | effect/span median | max |\n|---|---|---|---|---|---|")
-    for effect, pairs in per_effect.items():
-        over_noise, over_span = np.array([a for a, _ in pairs]), 100.0 * np.array([b for _, b in pairs])
-        rows.append(
-            f"| {effect} | {over_noise.min():.1f} | {np.median(over_noise):.1f} | {over_noise.max():.1f} | "
-            f"{np.median(over_span):.1f} % | {over_span.max():.1f} % |"
-        )
-    rows.append(f"\nprotocols: {', '.join(sorted({c.protocol for c in cases}))}")
-    rows.append(f"rates [Hz]: {', '.join(f'{r:g}' for r in sorted({c.rate_hz for c in cases}))}")
-    rows.append(f"\n{n_cases} cases of {duration_s:g} s built in {time.process_time() - start:.1f} CPU s")
-    return "\n".join(rows)
+    return case_table(blind2_cases(duration_s), simulate, duration_s)
 
 
 if __name__ == "__main__":
