@@ -291,6 +291,8 @@ def test_a_cause_another_term_explains_as_well_is_not_named():
     assert "load and temperature varied independently" in v.reason  # the general advice for this pair
     clear = verdict(creep=creep, load_dependence=[0.36, 0.38, 0.37, 0.36])  # 4 % behind: distinct
     assert clear.cause == "creep"
+    stronger_yardstick = verdict(creep=creep, output_lag=[0.50, 0.52, 0.51, 0.50])  # never named itself
+    assert stronger_yardstick.cause == "none" and "explains the held-out error better, so" in stronger_yardstick.reason
 
 
 def test_only_terms_judged_as_the_cause_was_can_be_its_rivals():

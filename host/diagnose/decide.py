@@ -415,11 +415,12 @@ def distinct(verdict: Verdict, scores: dict[str, CandidateScore]) -> Verdict:
         return verdict
     best, rival = scores[verdict.cause], scores[rivals[0]]
     advice = SEPARATING_PROTOCOL.get(frozenset((verdict.cause, rivals[0])), GENERAL_PROTOCOL)
-    how = (
-        f"within {DISTINCT_MARGIN:.0%} as well"
-        if rival.mean <= best.mean + DISTINCT_MARGIN
-        else "better (a signature nominated the weaker one)"
-    )
+    if rival.mean <= best.mean + DISTINCT_MARGIN:
+        how = f"within {DISTINCT_MARGIN:.0%} as well"
+    elif verdict.decided_by.startswith("signature"):
+        how = "better (a signature nominated the weaker one)"
+    else:  # a term that fails a rule of its own (a yardstick, a worst fold) yet gains more
+        how = "better"
     reason = (
         f"cannot tell {verdict.cause} ({best.mean:+.1%}) from {rivals[0]} ({rival.mean:+.1%}): the other term "
         f"explains the held-out error {how}, so naming either would be a guess; to separate them, record "
