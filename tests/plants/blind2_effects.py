@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from tests.plants.blind2_cores import Core, stiffness_n_mm
 from tests.plants.effects import lowpass
+from tests.plants.recording import drawn_columns
 
 Array = NDArray[np.float64]
 BLIND2_FORMS: dict[str, tuple[str, ...]] = {
@@ -118,9 +119,7 @@ TEMPERATURE_PATTERNS = {"clouds": temp_clouds, "thermostat": temp_thermostat}
 
 def columns(t: Array, rng: np.random.Generator) -> tuple[Array, Array, str, str]:
     """Load [kg] and temperature [degC] for a record and their pattern names (independent of the effect)."""
-    load_name = tuple(LOAD_PATTERNS)[int(rng.integers(0, len(LOAD_PATTERNS)))]
-    temp_name = tuple(TEMPERATURE_PATTERNS)[int(rng.integers(0, len(TEMPERATURE_PATTERNS)))]
-    return LOAD_PATTERNS[load_name](t, rng), TEMPERATURE_PATTERNS[temp_name](t, rng), load_name, temp_name
+    return drawn_columns(LOAD_PATTERNS, TEMPERATURE_PATTERNS, t, rng)
 
 
 # ---- effects -------------------------------------------------------------------------------------

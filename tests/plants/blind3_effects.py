@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tests.plants.blind3_cores import Core, lag, position_sensor, stiffness_n_mm
+from tests.plants.recording import drawn_columns
 
 Array = NDArray[np.float64]
 G_MS2 = 9.81
@@ -117,9 +118,7 @@ TEMPERATURE_PATTERNS = {"ramp_soak": temp_ramp_soak, "peltier_sine": temp_peltie
 
 def columns(t: Array, rng: np.random.Generator) -> tuple[Array, Array, str, str]:
     """Load [kg] and temperature [degC] for a record and their pattern names (independent of the effect)."""
-    load_name = tuple(LOAD_PATTERNS)[int(rng.integers(0, len(LOAD_PATTERNS)))]
-    temp_name = tuple(TEMPERATURE_PATTERNS)[int(rng.integers(0, len(TEMPERATURE_PATTERNS)))]
-    return LOAD_PATTERNS[load_name](t, rng), TEMPERATURE_PATTERNS[temp_name](t, rng), load_name, temp_name
+    return drawn_columns(LOAD_PATTERNS, TEMPERATURE_PATTERNS, t, rng)
 
 
 # ---- effects -------------------------------------------------------------------------------------

@@ -1,5 +1,6 @@
-"""How a plant family's rig records a simulated case: sensor noise and reading steps on the
-output, load and temperature channels, and the Markdown table of a family's cases.
+"""How a plant family's rig records a simulated case: the load and temperature columns drawn
+from a family's patterns, sensor noise and reading steps on the output, load and temperature
+channels, and the Markdown table of a family's cases.
 
 Shared by the blind2 and blind3 families (their recording code had been written twice).
 """
@@ -7,7 +8,7 @@ Shared by the blind2 and blind3 families (their recording code had been written 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,6 +34,19 @@ class Sensors:
     load_read_kg: float
     temp_noise_k: float
     temp_read_k: float
+
+
+def drawn_columns(
+    load_patterns: Mapping[str, Callable[[Array, np.random.Generator], Array]],
+    temperature_patterns: Mapping[str, Callable[[Array, np.random.Generator], Array]],
+    t: Array,
+    rng: np.random.Generator,
+) -> tuple[Array, Array, str, str]:
+    """Load [kg] and temperature [degC] of a record, each from a pattern drawn at random, and the
+    patterns' names (independent of the effect)."""
+    load_name = tuple(load_patterns)[int(rng.integers(0, len(load_patterns)))]
+    temp_name = tuple(temperature_patterns)[int(rng.integers(0, len(temperature_patterns)))]
+    return load_patterns[load_name](t, rng), temperature_patterns[temp_name](t, rng), load_name, temp_name
 
 
 def read(x: Array, step: float) -> Array:
