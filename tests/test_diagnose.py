@@ -310,3 +310,23 @@ def test_only_terms_judged_as_the_cause_was_can_be_its_rivals():
     scores["load_dependence"].drift_margins = [0.05, 0.04, 0.06, 0.05]  # ahead on the shared rows
     scores["slow_drift"] = scored("slow_drift", [0.39, 0.40, 0.39, 0.38])
     assert distinct(choose(scores, 0.0), scores).cause == "load_dependence"
+
+
+def test_the_text_output_of_a_tie_names_the_tied_terms_not_the_leading_margins(tmp_path, monkeypatch, capsys):
+    """A tie printed with the leading cause's "+x % over its threshold" would read as confidence
+    in it; the text names the tied terms and their gains instead."""
+    import dataclasses
+    from pathlib import Path
+
+    import host.diagnose.run as run
+
+    data = str(Path(__file__).resolve().parent.parent / "host" / "example_data" / "pma_mixed.csv")
+    real = diagnose(load_measurement(data), progress=False)
+    scores = dict(real.scores, creep=0.43, slow_drift=0.44)
+    confidence = dict(real.confidence, undecided_between=["creep", "slow_drift"], over_threshold=0.18)
+    tie = dataclasses.replace(real, cause="none", scores=scores, confidence=confidence)
+    monkeypatch.setattr(run, "diagnose", lambda *args, **kwargs: tie)
+    assert main(["diagnose", data]) == 0
+    out = capsys.readouterr().out
+    assert "undecided between: creep +43.0%, slow_drift +44.0%" in out
+    assert "over its threshold" not in out
