@@ -26,31 +26,18 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.signal import cont2discrete, lfilter
+
+from tests.plants.filters import lowpass, resonance
 
 Array = NDArray[np.float64]
 Core = Callable[[Array, float, dict[str, float]], Array]
 
 
-def first_order(x: Array, dt_s: float, tau_s: float) -> Array:
-    """First-order lag [s], at rest on ``x[0]``."""
-    a = 1.0 - math.exp(-dt_s / tau_s)
-    return np.asarray(lfilter([a], [1.0, a - 1.0], x, zi=[x[0] * (1.0 - a)])[0], dtype=np.float64)
-
-
 def valve_line(u: Array, dt_s: float, p: dict[str, float]) -> Array:
     """Pressure [bar] behind a proportional valve: a lag ``tau_valve_s`` plus a share
     ``tail_share`` that settles with the chamber's thermal time ``tail_tau_s`` (1.5-4 s)."""
-    fast = first_order(u, dt_s, p["tau_valve_s"])
-    return (1.0 - p["tail_share"]) * fast + p["tail_share"] * first_order(fast, dt_s, p["tail_tau_s"])
-
-
-def resonance(x: Array, dt_s: float, f_hz: float, zeta: float) -> Array:
-    """``y'' + 2 zeta wn y' + wn^2 y = wn^2 x`` (zero-order hold), starting at rest on ``x[0]``."""
-    wn = 2.0 * math.pi * f_hz
-    num, den, _ = cont2discrete(([wn * wn], [1.0, 2.0 * zeta * wn, wn * wn]), dt_s, method="zoh")
-    b, a = np.asarray(num, dtype=np.float64).ravel(), np.asarray(den, dtype=np.float64)
-    return np.asarray(lfilter(b, a, x - x[0]) + x[0], dtype=np.float64)
+    fast = lowpass(u, dt_s, p["tau_valve_s"])
+    return (1.0 - p["tail_share"]) * fast + p["tail_share"] * lowpass(fast, dt_s, p["tail_tau_s"])
 
 
 def stiffness_n_mm(p_bar: Array, params: dict[str, float]) -> Array:
@@ -158,7 +145,7 @@ def deadband_chamber(u: Array, dt_s: float, p: dict[str, float]) -> Array:
         elif e < -db:
             pr += rate * (e + db)
         out[i] = pr
-    return (1.0 - p["tail_share"]) * out + p["tail_share"] * first_order(out, dt_s, p["tail_tau_s"])
+    return (1.0 - p["tail_share"]) * out + p["tail_share"] * lowpass(out, dt_s, p["tail_tau_s"])
 
 
 def ch_contraction(pr: Array, p: dict[str, float]) -> Array:

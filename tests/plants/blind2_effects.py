@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tests.plants.blind2_cores import Core, stiffness_n_mm
-from tests.plants.effects import lowpass
+from tests.plants.filters import lowpass, variable_delay
 from tests.plants.recording import drawn_columns
 
 Array = NDArray[np.float64]
@@ -167,13 +167,6 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
     raise KeyError(f"unknown form {effect}:{form}; known: {BLIND2_FORMS}")
 
 
-def _variable_delay(x: Array, lag_samples: Array) -> Array:
-    """``x`` read ``lag_samples`` back, never going back in time (the read index only advances)."""
-    idx = np.arange(x.size, dtype=np.float64)
-    src = np.maximum.accumulate(np.clip(idx - lag_samples, 0.0, x.size - 1.0))
-    return np.asarray(np.interp(src, idx, x), dtype=np.float64)
-
-
 def _orifice(u: Array, dt_s: float, resistance: float) -> Array:
     """Muscle pressure [bar] behind a turbulent orifice: ``p' = sign(u - p) sqrt(|u - p|) / R``."""
     out = np.empty_like(u)
@@ -219,12 +212,12 @@ def drive_of(u: Array, dt_s: float, form: str, q: dict[str, float], temperature:
         k = (np.arange(u.size) * dt_s / cycle).astype(int)
         sampled = u[np.minimum(np.round(k * cycle / dt_s).astype(int), u.size - 1)]  # read once per cycle
         lag = (max(q["latency_s"], cycle) + jitter[k]) / dt_s
-        return _variable_delay(sampled, lag)
+        return variable_delay(sampled, lag)
     if form == "line_echo":
         d = q["dead_time_s"] / dt_s
         r = min(q["reflection"], 0.6)
         lag = np.full(u.size, d)
-        return (1.0 - r) * _variable_delay(u, lag) + r * _variable_delay(u, 3.0 * lag)
+        return (1.0 - r) * variable_delay(u, lag) + r * variable_delay(u, 3.0 * lag)
     if form == "valve_sensor_offset":
         valve_t = lowpass(temperature, dt_s, q["valve_tau_s"]) - temperature[0]
         return np.asarray(np.clip(u - q["bar_per_k"] * valve_t, 0.0, None), dtype=np.float64)

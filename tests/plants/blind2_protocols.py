@@ -17,7 +17,9 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import PchipInterpolator
-from scipy.signal import cont2discrete, lfilter
+from scipy.signal import lfilter
+
+from tests.plants.filters import resonance
 
 Array = NDArray[np.float64]
 Protocol = Callable[[float, float, float, np.random.Generator], Array]
@@ -90,10 +92,8 @@ def setpoint_tracking(duration_s: float, dt_s: float, peak: float, rng: np.rando
         knots_t.append(knots_t[-1] + float(rng.uniform(4.0, 15.0)))
         knots_u.append(float(rng.uniform(0.08, 0.92)))
     setpoint = PchipInterpolator(knots_t, knots_u)(t) * peak
-    wn, zeta = 2 * np.pi * float(rng.uniform(0.5, 1.5)), float(rng.uniform(0.4, 0.7))
-    num, den, _ = cont2discrete(([wn * wn], [1.0, 2 * zeta * wn, wn * wn]), dt_s, method="zoh")
-    b, a = np.asarray(num, dtype=np.float64).ravel(), np.asarray(den, dtype=np.float64)
-    return np.asarray(lfilter(b, a, setpoint - setpoint[0]) + setpoint[0], dtype=np.float64)
+    f_hz, zeta = float(rng.uniform(0.5, 1.5)), float(rng.uniform(0.4, 0.7))
+    return resonance(setpoint, dt_s, f_hz, zeta)
 
 
 def pwm_duty(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:

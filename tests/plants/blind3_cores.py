@@ -32,33 +32,20 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.signal import cont2discrete, lfilter
+
+from tests.plants.filters import lowpass, resonance
 
 Array = NDArray[np.float64]
 Core = Callable[[Array, float, dict[str, float]], Array]
 G_MS2 = 9.81
 
 
-def lag(x: Array, dt_s: float, tau_s: float) -> Array:
-    """First-order lag with time constant ``tau_s`` [s], at rest on ``x[0]``."""
-    a = 1.0 - math.exp(-dt_s / tau_s)
-    return np.asarray(lfilter([a], [1.0, a - 1.0], x, zi=[x[0] * (1.0 - a)])[0], dtype=np.float64)
-
-
 def valve_line(u: Array, dt_s: float, p: dict[str, float]) -> Array:
     """Muscle pressure [bar] behind the proportional valve: two cascaded lags (spool
     ``tau_spool_s`` 10-30 ms, filling ``tau_fill_s`` 30-90 ms) and a share ``tail_share`` that
     settles with the air's heat exchange to the wall, ``tail_tau_s`` (1.5-4 s)."""
-    fast = lag(lag(u, dt_s, p["tau_spool_s"]), dt_s, p["tau_fill_s"])
-    return (1.0 - p["tail_share"]) * fast + p["tail_share"] * lag(fast, dt_s, p["tail_tau_s"])
-
-
-def ringing(x: Array, dt_s: float, f_hz: float, zeta: float) -> Array:
-    """The payload's resonance ``y'' + 2 zeta wn y' + wn^2 y = wn^2 x`` (zero-order hold), at rest on ``x[0]``."""
-    wn = 2.0 * math.pi * f_hz
-    num, den, _ = cont2discrete(([wn * wn], [1.0, 2.0 * zeta * wn, wn * wn]), dt_s, method="zoh")
-    b, a = np.asarray(num, dtype=np.float64).ravel(), np.asarray(den, dtype=np.float64)
-    return np.asarray(lfilter(b, a, x - x[0]) + x[0], dtype=np.float64)
+    fast = lowpass(lowpass(u, dt_s, p["tau_spool_s"]), dt_s, p["tau_fill_s"])
+    return (1.0 - p["tail_share"]) * fast + p["tail_share"] * lowpass(fast, dt_s, p["tail_tau_s"])
 
 
 def stiffness_n_mm(u: Array, params: dict[str, float]) -> Array:
@@ -131,7 +118,7 @@ def bistable_bellows(u: Array, dt_s: float, p: dict[str, float]) -> Array:
             next_up = float(np.min(np.where(is_open, inf, f_up)))
             next_dn = float(np.max(np.where(is_open, f_dn, -inf)))
         out[i] = n * max(fw, 0.0) / k_f + opened
-    return ringing(out, dt_s, p["f_res_hz"], p["zeta"])
+    return resonance(out, dt_s, p["f_res_hz"], p["zeta"])
 
 
 # ---- Armstrong-Frederick braid friction on a power-law muscle ----------------------------------
@@ -184,7 +171,7 @@ def af_braid(u: Array, dt_s: float, p: dict[str, float]) -> Array:
                 force = alpha + n * fy
         last = target
         out[i] = target - nr * force / k
-    return np.maximum(ringing(out, dt_s, p["f_res_hz"], p["zeta"]), 0.0)  # the payload rests on its stop
+    return np.maximum(resonance(out, dt_s, p["f_res_hz"], p["zeta"]), 0.0)  # the payload rests on its stop
 
 
 # ---- textile sleeve: slack then taut, Dahl friction on contact ----------------------------------
@@ -222,7 +209,7 @@ def sleeve_dahl(u: Array, dt_s: float, p: dict[str, float]) -> Array:
             z = min(max(z, -ri), ri)
         last = xi
         out[i] = xi - z
-    return ringing(out, dt_s, p["f_res_hz"], p["zeta"])
+    return resonance(out, dt_s, p["f_res_hz"], p["zeta"])
 
 
 # ---- Karnopp stick-slip on a linear guide -------------------------------------------------------

@@ -29,7 +29,8 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from tests.plants.blind3_cores import Core, lag, position_sensor, stiffness_n_mm
+from tests.plants.blind3_cores import Core, position_sensor, stiffness_n_mm
+from tests.plants.filters import lowpass
 from tests.plants.recording import drawn_columns
 
 Array = NDArray[np.float64]
@@ -101,7 +102,7 @@ def temp_ramp_soak(t: Array, rng: np.random.Generator) -> Array:
             ramp = abs(level - knots_c[-1]) / float(rng.uniform(0.15, 0.4))
             knots_t += [knots_t[-1] + ramp, knots_t[-1] + ramp + float(rng.uniform(*soak))]
             knots_c += [level, level]
-    return lag(np.interp(t, knots_t, knots_c), float(t[1] - t[0]), float(rng.uniform(1.0, 3.0)))
+    return lowpass(np.interp(t, knots_t, knots_c), float(t[1] - t[0]), float(rng.uniform(1.0, 3.0)))
 
 
 def temp_peltier_sine(t: Array, rng: np.random.Generator) -> Array:
@@ -222,7 +223,7 @@ def _rate_state_seal(x: Array, dt_s: float, q: dict[str, float]) -> Array:
     """The rod held by a seal whose strength [mm of play] is ``seal (a ln(1 + |v| / v0) - b phi)+``,
     ``phi' = (ln(1 + |v| / v0) - phi) |v| / dc`` (evolves over slip distance ``dc``); ``v`` the
     stroke speed [mm/s] (20 ms smoothing). A play of that radius around ``x``: 0 at rest."""
-    speed = lag(np.abs(np.gradient(x, dt_s)), dt_s, 0.02)
+    speed = lowpass(np.abs(np.gradient(x, dt_s)), dt_s, 0.02)
     direct = np.log1p(speed / q["v0_mm_s"])
     out = np.empty_like(x)
     y, phi = float(x[0]), 0.0
@@ -281,7 +282,7 @@ def _erlang_line(u: Array, dt_s: float, q: dict[str, float]) -> Array:
     p = _delayed(u, dt_s, q["length_m"] / SOUND_M_S)
     stages = int(q["stages"])
     for _ in range(stages):
-        p = lag(p, dt_s, max(q["disp_s_m2"] * q["length_m"] ** 2 / stages, 1e-6))
+        p = lowpass(p, dt_s, max(q["disp_s_m2"] * q["length_m"] ** 2 / stages, 1e-6))
     return p
 
 
@@ -308,7 +309,7 @@ def drive_of(u: Array, dt_s: float, form: str, q: dict[str, float], temperature:
     if form == "erlang_line":
         return _erlang_line(u, dt_s, q)
     if form == "regulator_span":
-        body = lag(temperature, dt_s, q["tau_s"]) - temperature[0]
+        body = lowpass(temperature, dt_s, q["tau_s"]) - temperature[0]
         span = 1.0 + q["span_scale"] * (q["tcs_per_k"] * body + q["tcs2_per_k2"] * body * body)
         return np.asarray(np.clip(u / np.maximum(span, 0.5), 0.0, None), dtype=np.float64)
     return u
@@ -361,7 +362,7 @@ def render(
 
         x = x - (shortening(load) - shortening(float(load[0])))
     elif form == "hall_magnet":
-        magnet = lag(temperature, dt_s, q["tau_s"]) - temperature[0]
+        magnet = lowpass(temperature, dt_s, q["tau_s"]) - temperature[0]
         field = np.maximum(1.0 + q["tc_scale"] * q["tc_per_k"] * magnet, 0.5)
         x = (q["gap_mm"] + x) * field ** (-1.0 / 3.0) - q["gap_mm"]
     reading = position_sensor(x, dt_s, params)

@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tests.plants.blind_cores import Core, Hooks
-from tests.plants.effects import lowpass
+from tests.plants.filters import lowpass, variable_delay
 
 Array = NDArray[np.float64]
 BLIND_FORMS: dict[str, tuple[str, ...]] = {
@@ -198,13 +198,6 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
     raise KeyError(f"unknown form {effect}:{form}; known: {BLIND_FORMS}")
 
 
-def _variable_delay(x: Array, lag_samples: Array) -> Array:
-    """``x`` read ``lag_samples`` back, never going back in time (the read index only advances)."""
-    idx = np.arange(x.size, dtype=np.float64)
-    src = np.maximum.accumulate(np.clip(idx - lag_samples, 0.0, x.size - 1.0))
-    return np.asarray(np.interp(src, idx, x), dtype=np.float64)
-
-
 def reversal_frequency(u: Array, dt_s: float, band: float) -> Array:
     """Excitation frequency [Hz] ``1 / (2 * time between the last two reversals)`` of ``u``,
     reversals counted past a dead band ``band``; held between reversals, 0.01 Hz at first."""
@@ -254,11 +247,11 @@ def render(
         dead = (
             q["dead_time_s"] * (1.0 + q["level_gain"] * (1.0 - smooth / peak)) * np.where(venting, q["vent_ratio"], 1.0)
         )
-        drive = _variable_delay(u, lowpass(dead, dt_s, 0.05) / dt_s)
+        drive = variable_delay(u, lowpass(dead, dt_s, 0.05) / dt_s)
     elif form == "valve_frames":
         frame = max(1, int(round(q["frame_s"] / dt_s)))
         held = u[(np.arange(n) // frame) * frame]
-        drive = _variable_delay(held, np.full(n, q["latency_s"] / dt_s))
+        drive = variable_delay(held, np.full(n, q["latency_s"] / dt_s))
     elif form == "payload_balance":
         hooks = Hooks(hooks.width, q["lever"] * load, hooks.rubber)
     elif form == "entropic_rubber":

@@ -13,7 +13,8 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.signal import lfilter
+
+from tests.plants.filters import lowpass
 
 Array = NDArray[np.float64]
 FORMS: dict[str, tuple[str, ...]] = {
@@ -24,12 +25,6 @@ FORMS: dict[str, tuple[str, ...]] = {
     "load_dependence": ("gain", "width"),
     "temperature_drift": ("gain", "narrowing"),
 }
-
-
-def lowpass(x: Array, dt_s: float, tau_s: float) -> Array:
-    """First-order lag with time constant ``tau_s`` [s], starting at rest on ``x[0]``."""
-    a = 1.0 - np.exp(-dt_s / tau_s)
-    return np.asarray(lfilter([a], [1.0, a - 1.0], x, zi=[x[0] * (1 - a)])[0], dtype=np.float64)
 
 
 def load_steps(t: Array, rng: np.random.Generator) -> Array:

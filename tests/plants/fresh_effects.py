@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from tests.plants.effects import lowpass
+from tests.plants.filters import lowpass, variable_delay
 from tests.plants.fresh_cores import Core, Hooks
 
 Array = NDArray[np.float64]
@@ -146,13 +146,6 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
     raise KeyError(f"unknown form {effect}:{form}; known: {FRESH_FORMS}")
 
 
-def _variable_delay(x: Array, lag_samples: Array) -> Array:
-    """``x`` read ``lag_samples`` back, never going back in time (the read index only advances)."""
-    idx = np.arange(x.size, dtype=np.float64)
-    src = np.maximum.accumulate(np.clip(idx - lag_samples, 0.0, x.size - 1.0))
-    return np.interp(src, idx, x)
-
-
 def _gated_creep(v: Array, dt_s: float, q: dict[str, float], span: float) -> Array:
     target = q["creep_share"] * span * np.maximum(0.0, v - q["threshold"]) / (1.0 - q["threshold"])
     up, down = 1.0 - np.exp(-dt_s / q["tau_up_s"]), 1.0 - np.exp(-dt_s / q["tau_recover_s"])
@@ -192,7 +185,7 @@ def render(
         dead = q["dead_time_scale"] * (
             q["dead_time_high_s"] + (q["dead_time_low_s"] - q["dead_time_high_s"]) * np.exp(-level / 0.25)
         )
-        drive = _variable_delay(u, dead / dt_s)
+        drive = variable_delay(u, dead / dt_s)
     elif form == "dead_zone":
         zone = np.minimum(q["dead_zone_per_kg"] * load * peak, 0.5 * peak)
         drive = peak * np.maximum(0.0, u - zone) / (peak - zone)
@@ -215,7 +208,7 @@ def render(
     elif form == "sensor_latency":
         t = np.arange(n) * dt_s
         jitter = 1.0 + q["jitter"] * np.sin(2 * np.pi * t / 37.0) * np.sin(2 * np.pi * t / 11.0)
-        x = _variable_delay(x, q["latency_s"] * jitter / dt_s)
+        x = variable_delay(x, q["latency_s"] * jitter / dt_s)
     elif form == "offset_gain":
         s = q["temp_scale"]
         x = x * (1.0 + s * q["gain_per_10k"] * d_temp / 10.0) + s * q["offset_share"] * span_mm * np.tanh(
