@@ -16,7 +16,7 @@ from edge.errors import DataError
 from hil.record import record, write_recording
 from host.cli import main
 from host.data import Measurement, load_measurement
-from host.diagnose.decide import CandidateScore, choose, distinct
+from host.diagnose.decide import COLUMN_GAIN_FLOOR, GAIN_FLOOR, CandidateScore, choose, distinct
 from host.diagnose.run import CAUSES, DecimatedWarning, decimated, diagnose
 
 
@@ -135,6 +135,19 @@ def test_a_temperature_that_follows_time_is_named_with_the_confound():
 def test_observed_causes_do_not_win_by_rank_against_a_stronger_dynamic_cause():
     v = verdict(creep=[0.55, 0.50, 0.52, 0.56], temperature_drift=[0.34, 0.33, 0.35, 0.34])
     assert v.cause == "creep"
+
+
+def test_a_measured_column_has_a_lower_floor_than_a_term_without_a_null_of_its_own():
+    gains = [0.18, 0.19, 0.17, 0.18]  # between COLUMN_GAIN_FLOOR and GAIN_FLOOR
+    scores = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}
+    scores["load_dependence"] = scored("load_dependence", gains)
+    scores["load_dependence"].null_gains = [0.02 * k for k in range(9)]  # every copy gains less
+    v = distinct(choose(scores, 0.0), scores)
+    assert v.cause == "load_dependence" and v.confidence["threshold"] == COLUMN_GAIN_FLOOR
+    scores["load_dependence"].null_gains[-1] = 0.20  # a copy of the column explains as much
+    assert distinct(choose(scores, 0.0), scores).cause == "none"
+    v = verdict(creep=gains)  # a dynamic term has no null but the calibrated floor
+    assert v.cause == "none" and f"below {GAIN_FLOOR:.0%}" in v.reason
 
 
 def test_a_rate_term_that_a_linear_lag_explains_as_well_is_not_rate_dependence():
