@@ -1,15 +1,18 @@
 """Four hysteresis cores for the sixth (blind4) plant family, structurally unlike the other twenty.
 
 Every core maps a set pressure ``u`` [bar gauge, 0..peak] to a contraction ``y`` [mm],
-``core(u, dt_s, params) -> y``, through the valve's lag (:func:`tests.plants.blind4_rig.valve`).
+``core(u, dt_s, params, width=None) -> y``, through the valve's lag
+(:func:`tests.plants.blind4_rig.valve`); ``width`` is a per-sample factor on the braid's
+friction (1: as drawn), through which the lubricant's temperature acts.
 The rest of the rig (supply droop, linkage play, mounting plate, transducer errors) is added by
 :mod:`tests.plants.blind4_rig`; effects (:mod:`tests.plants.blind4_effects`) act on the pressure
 before the core or on the contraction after it.
 
 * :func:`masing_tondu`: the braid's friction as an *extended Masing* hysteresis in pressure
   (a tanh backbone, every branch the backbone doubled about its reversal point, a stack of
-  reversal points so that a closed minor loop is forgotten), lowering the effective pressure of
-  a Tondu-Lopez muscle (braid angle 20-28 deg, end-effect ``k``) against a payload and a spring.
+  reversal points so that a closed minor loop is forgotten), taking a share of the pressure
+  (friction grows with the braid's normal force, so none is left vented) from a Tondu-Lopez
+  muscle (braid angle 20-28 deg, end-effect ``k``) against a payload and a spring.
 * :func:`tellinen_sleeve`: a sleeve muscle described by its two limiting branches (an
   exponential envelope plus and minus a skewed half-width) and the *Tellinen* rule inside them:
   a branch's slope is the limiting branch's slope times the share of the way still left to it.
@@ -26,8 +29,8 @@ before the core or on the contraction after it.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from functools import cache
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -35,7 +38,14 @@ from numpy.typing import NDArray
 from tests.plants.blind4_rig import draw_rig, valve
 
 Array = NDArray[np.float64]
-Core = Callable[[Array, float, dict[str, float]], Array]
+
+
+class Core(Protocol):
+    def __call__(self, u: Array, dt_s: float, p: dict[str, float], width: Array | None = None) -> Array: ...
+
+
+def _width(width: Array | None, like: Array) -> Array:
+    return np.ones_like(like) if width is None else np.asarray(width, dtype=np.float64)
 
 
 # ---- Tondu-Lopez statics -------------------------------------------------------------------------
@@ -116,35 +126,38 @@ def masing(pressure: Array, half_width: float, knee: float) -> Array:
     return out
 
 
-def masing_tondu(u: Array, dt_s: float, p: dict[str, float]) -> Array:
-    """Contraction [mm] of a Tondu-Lopez muscle at the effective pressure ``p - h`` [bar], ``h``
-    the Masing friction loss (half-width ``masing_bar``, knee ``knee_bar``)."""
+def masing_tondu(u: Array, dt_s: float, p: dict[str, float], width: Array | None = None) -> Array:
+    """Contraction [mm] of a Tondu-Lopez muscle at the effective pressure ``p (1 - w h)`` [bar],
+    ``h`` the Masing friction share (half-width ``masing_share``, knee ``knee_bar``)."""
     pr = valve(u, dt_s, p)
-    return tondu_contraction(pr - masing(pr, p["masing_bar"], p["knee_bar"]), p)
+    h = masing(pr, p["masing_share"], p["knee_bar"])
+    return tondu_contraction(pr * (1.0 - _width(width, pr) * h), p)
 
 
 # ---- Tellinen rule between limiting branches -----------------------------------------------------
 
 
 def _branches(v: Array, p: dict[str, float]) -> tuple[Array, Array]:
-    """Ascending and descending limiting branches [share of stroke] at ``v = p / peak``."""
+    """Centre and half-width [share of stroke] of the limiting branches at ``v = p / peak``
+    (ascending: centre - half, descending: centre + half)."""
     vs = p["envelope_share"]
     centre = -np.expm1(-np.clip(v, 0.0, 1.2) / vs) / -math.expm1(-1.0 / vs)
     s = np.clip(v, 0.0, 1.0)
     half = p["half_width"] * np.sin(np.pi * s) ** 0.7 * (1.0 + p["skew"] * (s - 0.5))
-    return centre - half, centre + half
+    return centre, half
 
 
-def tellinen_sleeve(u: Array, dt_s: float, p: dict[str, float]) -> Array:
+def tellinen_sleeve(u: Array, dt_s: float, p: dict[str, float], width: Array | None = None) -> Array:
     """Stroke [mm] ``stroke_mm y``: rising, ``dy = dL_a (L_d - y) / (L_d - L_a)``; falling,
-    ``dy = dL_d (y - L_a) / (L_d - L_a)`` (sub-steps of at most 0.004 in ``v``)."""
+    ``dy = dL_d (y - L_a) / (L_d - L_a)`` (sub-steps of at most 0.004 in ``v``); ``width``
+    scales the state's distance from the centre curve (the loop, minor loops too)."""
     v = np.clip(valve(u, dt_s, p) / p["peak"], 0.0, None)
     grid = np.linspace(0.0, 1.2, 1201)
-    lo_tab, hi_tab = _branches(grid, p)
+    c_tab, h_tab = _branches(grid, p)
     out = np.empty_like(v)
     last = float(v[0])
-    lo0, _ = _branches(np.array([last]), p)
-    y = float(lo0[0])
+    c0, h0 = _branches(np.array([last]), p)
+    y = float(c0[0] - h0[0])
     for i, vi in enumerate(v.tolist()):
         n_sub = 1 + int(abs(vi - last) / 0.004)
         step = (vi - last) / n_sub
@@ -152,33 +165,33 @@ def tellinen_sleeve(u: Array, dt_s: float, p: dict[str, float]) -> Array:
             a, b = last + k * step, last + (k + 1) * step
             ja, jb = min(int(a * 1000.0), 1199), min(int(b * 1000.0), 1199)
             fa, fb = a * 1000.0 - ja, b * 1000.0 - jb
-            la = lo_tab[ja] + fa * (lo_tab[ja + 1] - lo_tab[ja])
-            da = hi_tab[ja] + fa * (hi_tab[ja + 1] - hi_tab[ja])
-            lb = lo_tab[jb] + fb * (lo_tab[jb + 1] - lo_tab[jb])
-            db = hi_tab[jb] + fb * (hi_tab[jb + 1] - hi_tab[jb])
+            ca, ha = c_tab[ja] + fa * (c_tab[ja + 1] - c_tab[ja]), h_tab[ja] + fa * (h_tab[ja + 1] - h_tab[ja])
+            cb, hb = c_tab[jb] + fb * (c_tab[jb + 1] - c_tab[jb]), h_tab[jb] + fb * (h_tab[jb + 1] - h_tab[jb])
+            la, da, lb, db = ca - ha, ca + ha, cb - hb, cb + hb
             gap = max(da - la, 1e-6)
             y += (lb - la) * (da - y) / gap if step > 0.0 else (db - da) * (y - la) / gap
             y = min(max(y, lb), db)
         last = vi
-        out[i] = p["stroke_mm"] * y
-    return out
+        out[i] = y
+    centre, _ = _branches(v, p)
+    return np.asarray(p["stroke_mm"] * (centre + _width(width, v) * (out - centre)), dtype=np.float64)
 
 
 # ---- Bliman-Sorine friction ----------------------------------------------------------------------
 
 
-def bliman_sorine(u: Array, dt_s: float, p: dict[str, float]) -> Array:
-    """Contraction ``x_f - F / K(p)`` [mm]: ``x_f`` the frictionless Tondu-Lopez balance, ``F``
+def bliman_sorine(u: Array, dt_s: float, p: dict[str, float], width: Array | None = None) -> Array:
+    """Contraction ``x_f - w F / K(p)`` [mm]: ``x_f`` the frictionless Tondu-Lopez balance, ``F``
     [N] the Bliman-Sorine friction ``z1 - z2`` with ``dz1/ds = (f1 sgn - z1) / (eta eps)``,
     ``dz2/ds = (f2 sgn - z2) / eps`` in the path length ``s`` [mm] of ``x_f`` (exact per
-    sample), ``K`` the balance's stiffness ``k0 + k1 p / peak``."""
+    sample, starting relaxed), ``K`` the balance's stiffness ``k0 + k1 p / peak``."""
     pr = valve(u, dt_s, p)
     xf = tondu_contraction(pr, p)
     stiff = p["k0_n_mm"] + p["k1_n_mm"] * np.clip(pr, 0.0, None) / p["peak"]
     f1, f2, l1, l2 = p["f1_n"], p["f2_n"], p["eta"] * p["eps_mm"], p["eps_mm"]
-    z1, z2, last, sgn = -f1, -f2, float(xf[0]), -1.0
+    z1, z2, last, sgn = 0.0, 0.0, float(xf[0]), -1.0  # relaxed after the vented rest
     out = np.empty_like(xf)
-    for i, (xi, ki) in enumerate(zip(xf.tolist(), stiff.tolist())):
+    for i, (xi, ki, wi) in enumerate(zip(xf.tolist(), stiff.tolist(), _width(width, xf).tolist())):
         ds = xi - last
         if ds != 0.0:
             sgn = 1.0 if ds > 0.0 else -1.0
@@ -186,7 +199,7 @@ def bliman_sorine(u: Array, dt_s: float, p: dict[str, float]) -> Array:
             z1 = sgn * f1 + (z1 - sgn * f1) * e1
             z2 = sgn * f2 + (z2 - sgn * f2) * e2
             last = xi
-        out[i] = xi - (z1 - z2) / ki
+        out[i] = xi - wi * (z1 - z2) / ki
     return out
 
 
@@ -225,22 +238,23 @@ def sw_branches() -> tuple[Array, Array]:
     return upper_filled, lower_filled
 
 
-def stoner_crimps(u: Array, dt_s: float, p: dict[str, float]) -> Array:
+def stoner_crimps(u: Array, dt_s: float, p: dict[str, float], width: Array | None = None) -> Array:
     """Stroke [mm] ``rev_mm S(v) + hyst_mm (mean m + 1) / 2``: ``S`` an exponential envelope,
     ``m`` the elements' projections; element ``(angle, scale)`` sees the reduced field ``(p -
     centre) / H``, ``H = h_scale peak`` times 0.75, 0.9, 1.1, 1.3, and is in the upper well
-    after it last passed ``+h_sw`` and in the lower one after it last passed ``-h_sw``."""
+    after it last passed ``+w h_sw`` and in the lower one after it last passed ``-w h_sw``
+    (``w``: ``width``, the cords' friction scaling their switching fields)."""
     pr = valve(u, dt_s, p)
     v = np.clip(pr / p["peak"], 0.0, None)
     upper, lower = sw_branches()
     hsw = switching_field(SW_ANGLES_DEG)
-    idx = np.arange(v.size)
+    idx, w = np.arange(v.size), _width(width, v)
     total = np.zeros_like(v)
     n = 0
     for scale in (0.75, 0.9, 1.1, 1.3):
         h = (v - p["centre_share"]) / (p["h_scale"] * scale)
         for k in range(SW_ANGLES_DEG.size):
-            ev = np.where(h >= hsw[k], 1, np.where(h <= -hsw[k], -1, 0))
+            ev = np.where(h >= w * hsw[k], 1, np.where(h <= -w * hsw[k], -1, 0))
             last = np.maximum.accumulate(np.where(ev != 0, idx, 0))
             state = np.where(ev[last] != 0, ev[last], -1)
             total += np.where(state > 0, np.interp(h, SW_GRID, upper[k]), np.interp(h, SW_GRID, lower[k]))
@@ -265,9 +279,9 @@ def draw_params(core: str, rng: np.random.Generator, peak: float) -> dict[str, f
     if core in ("masing_tondu", "bliman_sorine"):
         g = _tondu_params(rng, peak, stroke)
         k0, k1 = _tangent_stiffness(g, peak)
-        g.update(draw_rig(rng, peak, k0, k1, stroke))
+        g.update(draw_rig(rng, peak, k0, k1))
         if core == "masing_tondu":
-            g.update(masing_bar=rng.uniform(0.025, 0.05) * peak, knee_bar=rng.uniform(0.04, 0.1) * peak)
+            g.update(masing_share=rng.uniform(0.05, 0.1), knee_bar=rng.uniform(0.04, 0.1) * peak)
         else:
             k_mid = k0 + 0.5 * k1
             coulomb = rng.uniform(0.02, 0.045) * stroke * k_mid  # N: half the loop width
@@ -275,7 +289,7 @@ def draw_params(core: str, rng: np.random.Generator, peak: float) -> dict[str, f
             g.update(f1_n=coulomb + f2, f2_n=f2, eta=rng.uniform(0.25, 0.5), eps_mm=rng.uniform(0.3, 0.8))
         return g
     k_mid = rng.uniform(3.0, 8.0)
-    g = draw_rig(rng, peak, 0.6 * k_mid, 0.8 * k_mid, stroke)
+    g = draw_rig(rng, peak, 0.6 * k_mid, 0.8 * k_mid)
     if core == "tellinen_sleeve":
         g.update(
             stroke_mm=stroke,

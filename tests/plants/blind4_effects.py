@@ -13,10 +13,10 @@ and resets), after a fixed USB latency; a camera marker tracker (30-60 frames/s,
 averages the stroke, frames arrive 1.5-3 frames late and are interpolated). Load dependence:
 the payload's change rides on the compliant mounting plate, which sags and rings slower; the
 payload pulls through the muscle's tangent stiffness (the sag is larger at low pressure).
-Temperature drift: a dome-loaded regulator whose gas reference follows the gas law (set
-absolute set pressure times ``T_dome / T_dome(0)`` in kelvin); the rod guide's grease, whose
-yield (the guide play) follows the Vogel-Fulcher-Tammann law ``exp(B / (T - T_v))`` in the
-grease's lagged temperature.
+Temperature drift: a dome-loaded regulator whose gas reference follows the gas law (the
+absolute set pressure times ``T_dome / T_dome(0)`` in kelvin); the silicone grease between the
+bladder and the braid, whose yield (a factor on the core's friction, through ``width``) follows
+the Vogel-Fulcher-Tammann law ``exp(B / (T - T_v))`` in the grease's lagged temperature.
 
 Load [kg] and temperature [degC] columns always move; when they are not the effect they are
 decoys. Load: a sand hopper that pours into a bag and a trapdoor that dumps it, or a person
@@ -191,7 +191,7 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
     if form == "grease_viscosity":  # Vogel-Fulcher-Tammann B [K] and T_v [K]; grease lag [s]
         return {
             "activation_scale": 1.0,
-            "vft_b_k": rng.uniform(700.0, 1100.0),
+            "vft_b_k": rng.uniform(900.0, 1400.0),
             "vft_tv_k": rng.uniform(190.0, 215.0),
             "grease_tau_s": rng.uniform(3.0, 10.0),
         }
@@ -317,6 +317,10 @@ def render(
     droop = supply_droop(u, dt_s, params)
     if form == "dome_regulator":
         x = core(drive_of(droop, dt_s, form, q, temperature), dt_s, params)
+    elif form == "grease_viscosity":
+        grease = lowpass(temperature, dt_s, q["grease_tau_s"]) + KELVIN - q["vft_tv_k"]
+        vft = q["activation_scale"] * q["vft_b_k"] * (1.0 / grease - 1.0 / grease[0])
+        x = core(droop, dt_s, params, np.exp(np.clip(vft, -3.0, 1.1)))  # at most 3x the friction
     else:
         x = core(droop, dt_s, params) if base is None else base
     span = float(np.ptp(x))
@@ -333,10 +337,6 @@ def render(
         x = x - q["load_share"] * G_MS2 * (load - load[0]) / stiffness_n_mm(droop, params)
     if form == "mount_sag_inertia":
         reading = rig_reading(x, dt_s, params, extra_mass_kg=q["payload_share"] * (load - load[0]))
-    elif form == "grease_viscosity":
-        grease = lowpass(temperature, dt_s, q["grease_tau_s"]) + KELVIN - q["vft_tv_k"]
-        vft = q["activation_scale"] * q["vft_b_k"] * (1.0 / grease - 1.0 / grease[0])
-        reading = rig_reading(x, dt_s, params, play_scale=np.exp(np.clip(vft, -3.0, 1.1)))  # at most 3x as stiff
     else:
         reading = rig_reading(x, dt_s, params)
     if form == "clock_drift_resync":

@@ -20,8 +20,8 @@ effect minus the same record with it off) lies in ``[5 x noise, 12 % of span]`` 
 :func:`tests.plants.visibility.scale_into_band` (the rescale is recorded in the truth).
 
 Confounds in every record, effect-free ones too (:mod:`tests.plants.blind4_rig`): a supply droop
-as the compressor cycles (0.4-1.2 % over 25-60 s), the linkage backlash plus the guide's grease
-friction (a play of 3-4 % of the stroke), a compliant mounting plate (6-20 Hz), and the transducer's own
+as the compressor cycles (0.4-1.2 % over 25-60 s), the linkage backlash plus the guide's friction
+(a play of 0.08-0.23 mm), a compliant mounting plate (6-20 Hz), and the transducer's own
 thermal offset wander (not the temperature column's), 1/f noise and rare clipped spikes; sensor
 noise 0.015-0.04 mm per plant with 0.02 mm quantisation; load (read to 0.005 kg) and
 temperature (read to 0.05 K) columns that always move and act only in their own effect's

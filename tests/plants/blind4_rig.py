@@ -5,9 +5,8 @@ Pressure side: the valve's lag (:func:`valve`, part of every core) and a supply 
 pressures (a sawtooth of 25-60 s) which the regulator passes on as a droop of 0.4-1.2 % of the
 set pressure.
 
-Stroke side (:func:`rig_reading`): the rod guide's linkage backlash plus its grease friction (a
-play of 3-4 % of the stroke plus 0.03-0.08 mm
-radius, the guide bushing packed with grease), a compliant mounting plate carrying the muscle (a resonance of
+Stroke side (:func:`rig_reading`): the rod guide's linkage backlash plus its friction (a play
+of 0.08-0.23 mm radius), a compliant mounting plate carrying the muscle (a resonance of
 6-20 Hz whose mass the payload adds to), then the stroke transducer: a slow thermal offset of
 its own electronics (an Ornstein-Uhlenbeck wander, 0.03-0.1 mm over 20-80 s, *not* the
 temperature column's), 1/f (pink) noise of 3-10 um RMS and rare single-sample spikes (0.3-1.5 mm,
@@ -114,15 +113,13 @@ def rig_reading(
     x: Array,
     dt_s: float,
     p: dict[str, float],
-    play_scale: Array | None = None,
     extra_mass_kg: Array | None = None,
 ) -> Array:
     """The transducer's reading [mm] of a muscle contraction ``x`` [mm]: through the linkage
-    play (its grease part times ``play_scale``), the mounting plate (its mass plus
+    play, the mounting plate (its mass plus
     ``extra_mass_kg``, the payload's change since the start, which also sags the plate by
     ``g m / k_mount``; the plate's mass never below half its own) and the sensor errors."""
-    radius: Array | float = p["backlash_mm"] + p["grease_mm"] * (1.0 if play_scale is None else play_scale)
-    linked = play(x, radius)
+    linked = play(x, p["backlash_mm"] + p["guide_mm"])
     if extra_mass_kg is None:
         mounted = resonance(linked, dt_s, p["f_mount_hz"], p["zeta_mount"])
     else:
@@ -134,9 +131,8 @@ def rig_reading(
     return np.asarray(np.clip(reading, *RANGE_MM), dtype=np.float64)
 
 
-def draw_rig(rng: np.random.Generator, peak: float, k0: float, k1: float, stroke_mm: float) -> dict[str, float]:
-    """The rig's constants (the muscle's tangent stiffness ``k0 + k1 p / peak`` [N/mm] and its
-    stroke [mm] given: the guide bushing is sized to the muscle, its grease play 3-4 % of it)."""
+def draw_rig(rng: np.random.Generator, peak: float, k0: float, k1: float) -> dict[str, float]:
+    """The rig's constants (the muscle's tangent stiffness ``k0 + k1 p / peak`` [N/mm] given)."""
     return {
         "peak": peak,
         "tau_valve_s": rng.uniform(0.015, 0.045),
@@ -146,7 +142,7 @@ def draw_rig(rng: np.random.Generator, peak: float, k0: float, k1: float, stroke
         "k0_n_mm": k0,
         "k1_n_mm": k1,
         "backlash_mm": rng.uniform(0.03, 0.08),
-        "grease_mm": rng.uniform(0.03, 0.04) * stroke_mm,
+        "guide_mm": rng.uniform(0.05, 0.15),
         "f_mount_hz": rng.uniform(6.0, 20.0),
         "zeta_mount": rng.uniform(0.06, 0.25),
         "mount_kg": rng.uniform(1.5, 4.0),
