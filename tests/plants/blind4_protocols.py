@@ -21,6 +21,8 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from tests.plants.filters import lowpass
+
 Array = NDArray[np.float64]
 Protocol = Callable[[float, float, float, np.random.Generator], Array]
 
@@ -95,14 +97,7 @@ def levy_setpoints(duration_s: float, dt_s: float, peak: float, rng: np.random.G
         level.append(x)
     t = _t(duration_s, dt_s)
     idx = np.searchsorted(np.asarray(knots_t), t, side="right") - 1
-    target = peak * np.asarray(level)[idx]
-    a = 1.0 - np.exp(-dt_s / float(rng.uniform(0.15, 0.5)))
-    out = np.empty_like(target)
-    y = float(target[0])
-    for i, v in enumerate(target.tolist()):
-        y += a * (v - y)
-        out[i] = y
-    return out
+    return lowpass(peak * np.asarray(level)[idx], dt_s, float(rng.uniform(0.15, 0.5)))
 
 
 def coarse_dac_sine(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
