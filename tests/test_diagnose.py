@@ -220,6 +220,23 @@ def test_too_short_is_a_clear_error(tmp_path):
         diagnose(load_measurement(path))
 
 
+def test_a_record_that_reaches_its_range_ends_late_is_diagnosed_with_the_state_it_assumes(tmp_path, capsys):
+    # a sine of growing amplitude (a piezo excerpt, a ramped-up test): its extremes come in the
+    # last cycle, so no memory is known before; the state is assumed and the report says so
+    from edge.hysteresis.pi import play_outputs
+
+    t = np.arange(3000) * 0.01
+    u = 2.0 + (0.2 + 0.8 * t / t[-1]) * np.sin(2 * np.pi * 0.4 * t)
+    y = 10.0 * play_outputs(u, np.array([0.15]), np.array([u[0]]))[:, 0]
+    y += np.random.default_rng(1).normal(0.0, 0.01, t.size)
+    path = write_csv(tmp_path / "growing.csv", zip(t, u, y))
+    result = diagnose(load_measurement(path), progress=False)
+    assert result.start_index == 0 and "state assumed" in result.holdout
+    assert any("rose from the record's minimum" in note for note in result.notes)
+    assert main(["diagnose", str(path)]) == 0
+    assert "rose from the record's minimum" in capsys.readouterr().out
+
+
 def test_constant_input_is_a_clear_error(tmp_path):
     t = np.arange(2000) * 0.01
     path = write_csv(tmp_path / "flat.csv", zip(t, np.ones_like(t), np.sin(t)))

@@ -174,7 +174,7 @@ def cross_run(
     from host.diagnose.run import decimated
 
     train, _ = decimated(train)
-    ctx, _ = prepare(train, levels)
+    ctx, _, train_notes = prepare(train, levels)
     ctx.lag_s = choose_actuator_lag(ctx)
     model = fit_baseline(ctx)
     train_rmse = rmse(model.prediction, ctx.y)
@@ -182,6 +182,7 @@ def cross_run(
     results = []
     for raw in tests:
         test, notes = _on_grid_of(decimated(raw)[0], train.dt)
+        notes[:0] = [f"training record: {note}" for note in train_notes]
         if len(test) < MIN_SAMPLES:
             raise DataError(f"{test.source}: {len(test)} samples is too short; record at least {MIN_SAMPLES}")
         start = memory_start(test.u)

@@ -60,7 +60,7 @@ from host.diagnose.features import branch_offset, first_order, preisach_rows, sm
 from host.diagnose.folds import BLOCKS_PER_FOLD, MIN_BLOCK_SAMPLES, check_folds, holdout_masks, noise_floor
 from host.diagnose.hammerstein import FittedModel, fit_hammerstein, rmse
 from host.diagnose.signatures import signatures
-from host.identify.common import memory_start
+from host.identify.common import MemoryStart, memory_start
 
 __all__ = ["CAUSES", "Diagnosis", "diagnose", "prepare"]
 
@@ -107,6 +107,7 @@ class Diagnosis:
     evidence: dict[str, object]
     context: Context
     notes: list[str]
+    memory_assumed: bool = False  # the hysteresis state at the first sample was assumed (see notes)
 
     def as_json(self) -> dict[str, object]:
         """The result as plain JSON values: non-finite numbers (a fold with no rows to judge, a
@@ -175,8 +176,33 @@ def decimated_with_warning(m: Measurement) -> tuple[Measurement, list[str]]:
     return m, [note]
 
 
-def prepare(m: Measurement, levels: int) -> tuple[Context, int]:
-    """Validate the record and compute the features shared by every fold."""
+def known_memory(m: Measurement, assume_state: bool = True) -> tuple[MemoryStart, list[str]]:
+    """Where the hysteresis memory is known (:func:`memory_start`), or, when the input reaches an
+    end of its range too late to leave :data:`MIN_SAMPLES` after it (a sine of growing amplitude,
+    an excerpt of a longer run), the first sample with an assumed state: the input rose from the
+    record's minimum to its first value (the actuator at rest, vented or at its lowest drive,
+    before the record). The note says so: the first samples' verdict carries that assumption.
+    Without ``assume_state`` such a record is refused (:class:`DataError`)."""
+    start = memory_start(m.u)
+    if m.u.size - start.index >= MIN_SAMPLES:
+        return start, []
+    if not assume_state:
+        raise DataError(
+            f"{m.source}: the input reaches the end of its range only at sample {start.index}; "
+            f"fewer than {MIN_SAMPLES} samples remain with a known hysteresis state"
+        )
+    note = (
+        f"the input reaches the end of its range only at sample {start.index} of {m.u.size}, so the "
+        "hysteresis state at the start is assumed: the input rose from the record's minimum "
+        f"({float(m.u.min()):g}) to its first value ({float(m.u[0]):g}); start the record at rest "
+        "and sweep the full range first to diagnose without this assumption"
+    )
+    return MemoryStart(0, "ascending"), [note]
+
+
+def prepare(m: Measurement, levels: int, assume_state: bool = True) -> tuple[Context, int, list[str]]:
+    """Validate the record and compute the features shared by every fold; also returns the first
+    sample used and the notes on what was assumed (:func:`known_memory`)."""
     if len(m) < MIN_SAMPLES:
         raise DataError(f"{m.source}: {len(m)} samples is too short to diagnose; record at least {MIN_SAMPLES}")
     if np.ptp(m.u) <= 1e-9 * max(1.0, float(np.abs(m.u).max())):
@@ -186,12 +212,7 @@ def prepare(m: Measurement, levels: int) -> tuple[Context, int]:
             f"{m.source}: the output y is constant ({m.y[0]:g}); check the sensor wiring or the column "
             "mapping, there is nothing to diagnose"
         )
-    start = memory_start(m.u)
-    if m.u.size - start.index < MIN_SAMPLES:
-        raise DataError(
-            f"{m.source}: the input reaches the end of its range only at sample {start.index}; "
-            f"fewer than {MIN_SAMPLES} samples remain with a known hysteresis state"
-        )
+    start, notes = known_memory(m, assume_state)
     sl = slice(start.index, None)
     extras = {k: v[sl] for k, v in m.extras.items() if k in ("load", "temperature")}
     lag_rows = {lag: preisach_rows(first_order(m.u, m.dt, lag), start, levels) for lag in ACTUATOR_LAGS_S}
@@ -206,7 +227,7 @@ def prepare(m: Measurement, levels: int) -> tuple[Context, int]:
         m.dt,
         output_rate=smoothed_rate(m.y, m.dt)[sl],
     )
-    return ctx, start.index
+    return ctx, start.index, notes
 
 
 def choose_actuator_lag(ctx: Context) -> float:
@@ -244,13 +265,15 @@ def diagnose(
     blocks_per_fold: int = BLOCKS_PER_FOLD,
     levels: int = PREISACH_LEVELS,
     progress: bool | None = None,
+    assume_state: bool = True,
 ) -> Diagnosis:
     """Run the diagnosis (see module docstring). ``progress``: a tqdm line on stderr (None: when
-    stderr is a terminal)."""
+    stderr is a terminal). ``assume_state``: when the memory is known too late, diagnose from the
+    first sample with an assumed state (:func:`known_memory`) rather than refuse."""
     m, notes = decimated_with_warning(m)
     threads = 1 if len(m) * (levels + 1) * (levels + 2) // 2 < LARGE_PROBLEM_CELLS else 2
     with threadpool_limits(limits=threads):
-        return _diagnose(m, folds, blocks_per_fold, levels, progress, notes)
+        return _diagnose(m, folds, blocks_per_fold, levels, progress, notes, assume_state)
 
 
 def _fold_prediction(ctx: Context, d: Design, train: NDArray[np.bool_]) -> NDArray[np.float64] | None:
@@ -360,9 +383,16 @@ def _drift_null(ctx: Context, masks: list[NDArray[np.bool_]], base_folds: list[N
 
 
 def _diagnose(
-    m: Measurement, folds: int, blocks_per_fold: int, levels: int, progress: bool | None, notes: list[str]
+    m: Measurement,
+    folds: int,
+    blocks_per_fold: int,
+    levels: int,
+    progress: bool | None,
+    notes: list[str],
+    assume_state: bool,
 ) -> Diagnosis:
-    ctx, start_index = prepare(m, levels)
+    ctx, start_index, assumed = prepare(m, levels, assume_state)
+    notes = notes + assumed
     n = ctx.y.size
     check_folds(folds, n, blocks_per_fold)
     masks = holdout_masks(n, folds, blocks_per_fold)
@@ -441,6 +471,7 @@ def _diagnose(
             reason += "; the baseline's residual is white: what remains looks like noise"
     # the baseline's held-out error on the rows of the named cause (every row when none is named:
     # the rate-dependence term is judged on all held-out rows)
+    memory = "its hysteresis state assumed, see notes" if assumed else "where the hysteresis memory is known"
     reference = cause if cause != "none" else "rate_dependence"
     baseline_rmse = float(np.mean(base_scores[reference])) if base_scores[reference] else float("nan")
     extended_rmse = float(np.mean(ext_scores[cause])) if cause != "none" else baseline_rmse
@@ -451,8 +482,8 @@ def _diagnose(
         extended_rmse=extended_rmse,
         gain=float(max(0.0, 1.0 - extended_rmse / baseline_rmse)) if cause != "none" else 0.0,
         holdout=(
-            f"{folds * blocks_per_fold} contiguous blocks in time after sample {start_index} (where the "
-            f"hysteresis memory is known), dealt to {folds} folds in turn ({blocks_per_fold} blocks of "
+            f"{folds * blocks_per_fold} contiguous blocks in time after sample {start_index} ({memory}), dealt "
+            f"to {folds} folds in turn ({blocks_per_fold} blocks of "
             f"{n * ctx.dt / (folds * blocks_per_fold):.0f} s each); each model's hysteresis identified on the "
             "whole record, its dynamics and term coefficients fitted on the other folds' blocks, simulated over "
             "the whole record and scored on the held-out blocks; RMSE averaged over the folds"
@@ -471,6 +502,7 @@ def _diagnose(
         evidence=evidence,
         context=ctx,
         notes=notes,
+        memory_assumed=bool(assumed),
     )
 
 

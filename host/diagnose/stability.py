@@ -42,7 +42,10 @@ def diagnose_with_stability(m: Measurement, *, folds: int = 4, progress: bool | 
         kept = len(m) - int(round(share * len(m)))
         key = f"without_last_{share:.0%}"
         try:
-            shortened[key] = diagnose(m.slice(0, kept), folds=folds, progress=progress).cause
+            # a cut is judged from the same known memory as the whole record, never from an
+            # assumed state the whole record did not need
+            cut = diagnose(m.slice(0, kept), folds=folds, progress=progress, assume_state=whole.memory_assumed)
+            shortened[key] = cut.cause
         except DataError as refusal:  # too short for these folds once shortened: not evidence either way
             shortened[key] = "not checked"
             refusals.append(f"without the last {share:.0%}: {refusal}")
