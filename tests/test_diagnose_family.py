@@ -7,7 +7,8 @@ was changed after v4, so it is no longer blind. ``tests/plants/blind_family.py``
 (four more cores, new forms, protocols and rates), built blind and scored three times, never to
 choose between variants; ``tests/plants/blind2_family.py`` the fourth, built blind for v6 and
 scored once, at its end, then used with the other three to calibrate v7's gain floor;
-``tests/plants/blind3_family.py`` the fifth, built blind for v7 and scored once, at its end.
+``tests/plants/blind3_family.py`` the fifth, built blind for v7 and scored once, at its end;
+``tests/plants/blind4_family.py`` the sixth, built blind for v8 and scored once, at its end.
 The targets are the
 issue's, on the held-out set: at least 90 % of the effects named, at most 1 false alarm in 10
 effect-free records. ``python bench/diagnose_scorecard.py`` prints the same tables with every verdict.
@@ -24,16 +25,18 @@ from host.data import Measurement
 from host.diagnose.run import diagnose
 from tests.plants.blind2_family import blind2_cases, blind2_measurement
 from tests.plants.blind3_family import blind3_cases, blind3_measurement
+from tests.plants.blind4_family import blind4_cases, blind4_measurement
 from tests.plants.blind_family import blind_cases, blind_measurement
 from tests.plants.family import Case, measurement, tuning_cases
 from tests.plants.fresh_family import fresh_cases, fresh_measurement
 
 # the measured scorecards (bench/diagnose_scorecard.py --duration 100): named effects, false alarms
 FRESH_NAMED, FRESH_EFFECTS, FRESH_ALARMS, FRESH_NONE = 11, 40, 1, 20
-TUNING_NAMED, TUNING_ALARMS = 15, 1
-BLIND_NAMED, BLIND_EFFECTS, BLIND_ALARMS, BLIND_NONE = 9, 40, 0, 20
-BLIND2_NAMED, BLIND2_EFFECTS, BLIND2_ALARMS, BLIND2_NONE = 14, 40, 1, 20
+TUNING_NAMED, TUNING_ALARMS = 17, 1
+BLIND_NAMED, BLIND_EFFECTS, BLIND_ALARMS, BLIND_NONE = 10, 40, 0, 20
+BLIND2_NAMED, BLIND2_EFFECTS, BLIND2_ALARMS, BLIND2_NONE = 15, 40, 1, 20
 BLIND3_NAMED, BLIND3_EFFECTS, BLIND3_ALARMS, BLIND3_NONE = 6, 40, 0, 20
+BLIND4_NAMED, BLIND4_EFFECTS, BLIND4_ALARMS, BLIND4_NONE = 8, 40, 0, 20
 
 
 def _verdicts(
@@ -71,6 +74,11 @@ def blind2_verdicts() -> list[tuple[str, str]]:
 @pytest.fixture(scope="module")
 def blind3_verdicts() -> list[tuple[str, str]]:
     return _verdicts(blind3_cases(100.0), blind3_measurement)
+
+
+@pytest.fixture(scope="module")
+def blind4_verdicts() -> list[tuple[str, str]]:
+    return _verdicts(blind4_cases(100.0), blind4_measurement)
 
 
 def named_and_alarms(verdicts: list[tuple[str, str]]) -> tuple[int, int]:
@@ -131,8 +139,19 @@ def test_the_targets_hold_on_the_third_blind_plants(blind3_verdicts):
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason=f"below target: {BLIND4_NAMED}/{BLIND4_EFFECTS} named, {BLIND4_ALARMS}/{BLIND4_NONE} false alarms "
+    "(fourth blind set)",
+)
+def test_the_targets_hold_on_the_fourth_blind_plants(blind4_verdicts):
+    named, alarms = named_and_alarms(blind4_verdicts)
+    assert named >= 0.9 * BLIND4_EFFECTS and alarms <= BLIND4_NONE / 10, blind4_verdicts
+
+
+@pytest.mark.slow
 def test_the_scorecards_do_not_fall_below_the_recorded_numbers(
-    verdicts, tuning_verdicts, blind_verdicts, blind2_verdicts, blind3_verdicts
+    verdicts, tuning_verdicts, blind_verdicts, blind2_verdicts, blind3_verdicts, blind4_verdicts
 ):
     """What README and docs/benchmarks.md report (``--duration 100``); a change of the method that
     names fewer or alarms more must show up here, not only in a re-run of the bench."""
@@ -146,6 +165,8 @@ def test_the_scorecards_do_not_fall_below_the_recorded_numbers(
     assert named_and_alarms(blind2_verdicts)[1] <= BLIND2_ALARMS, blind2_verdicts
     assert named_and_alarms(blind3_verdicts)[0] >= BLIND3_NAMED, blind3_verdicts
     assert named_and_alarms(blind3_verdicts)[1] <= BLIND3_ALARMS, blind3_verdicts
+    assert named_and_alarms(blind4_verdicts)[0] >= BLIND4_NAMED, blind4_verdicts
+    assert named_and_alarms(blind4_verdicts)[1] <= BLIND4_ALARMS, blind4_verdicts
 
 
 # The rate-dependent PI plant (tests/foreign_plant.py) that the method before v4 named right on
