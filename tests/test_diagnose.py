@@ -262,7 +262,7 @@ def test_json_to_stdout_is_pure_json(small_csv, capsys):
 
 def test_a_long_record_is_decimated_with_a_warning_that_says_what_it_costs():
     n = 2_000_000
-    t = np.arange(n) * 0.0005
+    t = np.arange(n, dtype=np.float64) * 0.0005
     m = Measurement(t, np.sin(t), np.cos(t), {"load": np.zeros(n)})
     small, note = decimated(m)
     assert note is not None and "dead times shorter than" in note

@@ -106,11 +106,19 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument(
         "--decoy-columns", action="store_true", help="let load and temperature columns vary without any physical effect"
     )
-    rec.add_argument("--rig", choices=["muscle", "joint"], default="muscle",
-                     help="one muscle, or two on a pulley (writes t,u,y,u1,u2,p1,p2,theta)")
-    rec.add_argument("--joint-command", choices=["differential", "angle"], default="differential",
-                     help="joint only: u is the differential pressure [bar], or a commanded angle [deg] through "
-                     "the edge's static inversion (what the joint controller's Preisach map is fitted on)")
+    rec.add_argument(
+        "--rig",
+        choices=["muscle", "joint"],
+        default="muscle",
+        help="one muscle, or two on a pulley (writes t,u,y,u1,u2,p1,p2,theta)",
+    )
+    rec.add_argument(
+        "--joint-command",
+        choices=["differential", "angle"],
+        default="differential",
+        help="joint only: u is the differential pressure [bar], or a commanded angle [deg] through "
+        "the edge's static inversion (what the joint controller's Preisach map is fitted on)",
+    )
     rec.add_argument("--out", required=True, metavar="CSV", help="output CSV; the truth goes to <name>.truth.json")
     rec.set_defaults(run=_lazy("host.cli.hil", "run_record"))
     srv = hil_sub.add_parser("serve", help="real-time mode: serve the emulated rig's serial DAQ on a pseudo-terminal")
