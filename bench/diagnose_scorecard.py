@@ -54,20 +54,24 @@ SETS = {
 }
 
 
-def diagnosed(m: Measurement) -> dict[str, object]:
+def diagnosed(m: Measurement, assume_state: bool = True) -> dict[str, object]:
     """One scored diagnosis of ``m`` (warnings silenced): verdict, held-out gain, confidence, CPU
-    seconds, samples, which evidence decided. A record the method refuses in one line (a
-    ``DataError``) is the verdict ``refused`` with its message: a counted miss, not a crash."""
+    seconds, samples, which evidence decided, whether the hysteresis state at its first sample
+    was assumed. A record the method refuses in one line (a ``DataError``) is the verdict
+    ``refused`` with its message: a counted miss, not a crash. ``assume_state``: as
+    :func:`host.diagnose.run.diagnose`'s."""
     start = time.process_time()
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            d = diagnose(m, progress=False)
+            d = diagnose(m, progress=False, assume_state=assume_state)
     except DataError as refusal:
         outcome: dict[str, object] = {"verdict": "refused", "refusal": str(refusal), "gain": 0.0, "confidence": {}}
+        outcome["memory_assumed"] = False
         outcome["decided_by"] = "refused"
     else:
         outcome = {"verdict": d.cause, "gain": d.gain, "confidence": d.confidence, "decided_by": d.decided_by}
+        outcome["memory_assumed"] = d.memory_assumed
     return {**outcome, "cpu_s": time.process_time() - start, "samples": len(m)}
 
 
@@ -80,6 +84,7 @@ def line(mark: str, name: str, row: dict[str, object]) -> str:
     return (
         f"{mark:<5} {name:<58} -> {row['verdict']:<18} gain {row['gain']:6.1%} "
         f"margin {confidence.get('over_threshold', float('nan')):+.3f} cpu {row['cpu_s']:5.1f}s  ({row['decided_by']})"
+        + ("  [state assumed]" if row.get("memory_assumed") else "")
     )
 
 

@@ -7,11 +7,12 @@ A verdict that changes when the first 7 or 14 s of a record are dropped says mor
 record happens to start than about the plant (the issue's check: cutting 7-14 s changed 9 of 18
 verdicts). Each record is diagnosed whole and with each cut; printed: one line per record with
 its verdicts, then per set how many records kept one verdict over all cuts, how many verdicts
-changed per cut, and the named/false-alarm counts per cut. A record the method refuses after a
-cut (the shorter record no longer reaches its input's extremes early enough) counts as a change.
-``--from-end`` cuts the end instead (what ``pmactl diagnose --stability`` does: the memory start
-stays where it was). Also printed: how often a named cause is right when it held over every cut
-and when it did not (is a stable verdict one to trust?).
+changed per cut, and the named/false-alarm counts per cut. A start cut whose input no longer
+reaches its extremes early enough is diagnosed from an assumed state, as ``pmactl diagnose``
+does since v8 (before, it was refused and counted as a change). ``--from-end`` cuts the end
+instead (what ``pmactl diagnose --stability`` does: the memory start stays where it was, and a
+cut assumes a state only when the whole record did). Also printed: how often a named cause is
+right when it held over every cut and when it did not (is a stable verdict one to trust?).
 
 CPU: (1 + number of cuts) diagnoses per record, ~4 s each at 100 s; ``--workers 2`` splits
 records over two processes (wall time halves on an idle 2-core machine).
@@ -37,9 +38,16 @@ def verdicts(job: tuple[str, Case, tuple[float, ...], bool]) -> dict[str, object
     set_name, case, cuts, from_end = job
     m, _truth = SETS[set_name][1](case)
     out: dict[str, object] = {"set": set_name, "case": case.name, "effect": case.effect}
+    whole_assumed = True
     for cut in (0.0, *cuts):
         samples = int(round(cut / m.dt))
-        row = diagnosed((m.slice(0, len(m) - samples) if from_end else m.slice(samples)) if cut else m)
+        if not cut:
+            row = diagnosed(m)
+            whole_assumed = bool(row["memory_assumed"])
+        elif from_end:  # as --stability: a cut may assume a state only when the whole record did
+            row = diagnosed(m.slice(0, len(m) - samples), assume_state=whole_assumed)
+        else:
+            row = diagnosed(m.slice(samples))
         out[f"cut {cut:g}"] = row["verdict"]
         out[f"cpu {cut:g}"] = row["cpu_s"]
     return out

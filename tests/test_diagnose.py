@@ -17,7 +17,9 @@ from hil.record import record, write_recording
 from host.cli import main
 from host.data import Measurement, load_measurement
 from host.diagnose.decide import COLUMN_GAIN_FLOOR, GAIN_FLOOR, CandidateScore, choose, distinct
+from host.diagnose.features import branch_offset
 from host.diagnose.run import CAUSES, DecimatedWarning, decimated, diagnose
+from host.identify.common import MemoryStart
 
 
 def scored(cause: str, gains: list[float], base: float = 1.0) -> CandidateScore:
@@ -119,6 +121,16 @@ def test_non_finite_numbers_become_null_in_the_json():
     out = finite_or_null(payload)
     assert out == {"fold_gains": {"creep": [0.1, None, None]}, "gain": 0.2}
     json.dumps(out, allow_nan=False)
+
+
+def test_a_column_named_for_its_confound_with_time_needs_the_floor_of_a_term_without_a_null():
+    # its shifted copies follow time too, so the null that lets a column pass at 15 % is void
+    scores = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}
+    scores["slow_drift"] = scored("slow_drift", [0.40, 0.42, 0.41, 0.40])
+    scores["temperature_drift"] = scored("temperature_drift", [0.18, 0.19, 0.18, 0.17])
+    assert choose(scores, 0.0, {"temperature": 0.98}).cause == "slow_drift"
+    scores["temperature_drift"] = scored("temperature_drift", [0.30, 0.31, 0.30, 0.29])
+    assert choose(scores, 0.0, {"temperature": 0.98}).cause == "temperature_drift"
 
 
 def test_a_temperature_that_follows_time_is_named_with_the_confound():
@@ -233,8 +245,25 @@ def test_a_record_that_reaches_its_range_ends_late_is_diagnosed_with_the_state_i
     result = diagnose(load_measurement(path), progress=False)
     assert result.start_index == 0 and "state assumed" in result.holdout
     assert any("rose from the record's minimum" in note for note in result.notes)
+    assert result.cause == "none"  # a rate-independent play: the assumption invents no effect
+    assert result.as_json()["memory_assumed"] is True
     assert main(["diagnose", str(path)]) == 0
     assert "rose from the record's minimum" in capsys.readouterr().out
+    with pytest.raises(DataError, match="reaches the end of its range only at sample"):
+        diagnose(load_measurement(path), progress=False, assume_state=False)
+
+
+def test_the_branch_an_assumed_state_starts_on_is_the_rise_from_the_records_minimum():
+    # the Preisach rows of MemoryStart(0, "ascending") rise from the record's minimum; the branch
+    # feature must agree: just above the minimum the play has not left the bottom yet (+1, as
+    # after a fall), far above it the input rises on the ascending branch (-1)
+    u = np.r_[0.02, np.linspace(0.02, 1.0, 50), np.linspace(1.0, 0.0, 50)]
+    near = branch_offset(u, MemoryStart(0, "ascending"))
+    assert near[0] > 0.7
+    far = branch_offset(np.r_[0.9, u[1:]], MemoryStart(0, "ascending"))
+    assert far[0] == pytest.approx(-1.0)
+    # a true start at the maximum (memory_start's "ascending") is unchanged
+    assert branch_offset(np.r_[1.0, u[::-1]], MemoryStart(0, "ascending"))[0] == pytest.approx(-1.0)
 
 
 def test_constant_input_is_a_clear_error(tmp_path):

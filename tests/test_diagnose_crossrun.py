@@ -56,3 +56,16 @@ def test_the_cli_takes_train_and_repeated_tests(tmp_path, train, capsys):
     assert "a.csv -> b.csv: cause session_drift" in capsys.readouterr().out
     assert main(["diagnose", "--train", str(a)]) == 2
     assert "--test" in capsys.readouterr().err
+
+
+def test_a_test_record_whose_input_reaches_its_range_ends_late_is_judged_from_an_assumed_state(train):
+    # a ramp-up of the second session: its extremes come in the last samples (before: judged on
+    # a tail of a few samples, or an IndexError when the tail was two samples)
+    test = hil(2)
+    middle = float(np.median(test.u))
+    u = middle + (0.3 + 0.6 * test.t / test.t[-1]) * (test.u - middle)
+    u[-2:] = float(test.u.min()), float(test.u.max())  # the range's ends: the last two samples
+    late = Measurement(test.t, u, test.y, source="ramped session")
+    (result,) = cross_run(train, [late], progress=False)
+    assert any("rose from the record's minimum" in note for note in result.notes)
+    assert np.isfinite(result.test_rmse)

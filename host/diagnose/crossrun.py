@@ -38,8 +38,16 @@ from host.diagnose.decide import CROSSRUN_GAIN_FLOOR, CandidateScore, why_not
 from host.diagnose.features import branch_offset, first_order, slow_part, smoothed_rate
 from host.diagnose.folds import holdout_masks, noise_floor
 from host.diagnose.hammerstein import FittedModel, _steady_state, fit_hammerstein, rmse
-from host.diagnose.run import MIN_SAMPLES, PREISACH_LEVELS, choose_actuator_lag, fit_baseline, prepare
-from host.identify.common import MemoryStart, memory_start
+from host.diagnose.run import (
+    MIN_SAMPLES,
+    PREISACH_LEVELS,
+    choose_actuator_lag,
+    fit_baseline,
+    known_memory,
+    prepare,
+    samples_needed,
+)
+from host.identify.common import MemoryStart
 from host.identify.preisach import EverettGrid, regressor_chunks
 
 CORRECTIONS = (
@@ -185,7 +193,8 @@ def cross_run(
         notes[:0] = [f"training record: {note}" for note in train_notes]
         if len(test) < MIN_SAMPLES:
             raise DataError(f"{test.source}: {len(test)} samples is too short; record at least {MIN_SAMPLES}")
-        start = memory_start(test.u)
+        start, assumed = known_memory(test.u, test.source, needed=samples_needed(folds))
+        notes += assumed
         lagged_u = first_order(test.u, test.dt, ctx.lag_s)
         rows = rows_on_grid(lagged_u, grid, start)
         sl = slice(start.index, None)

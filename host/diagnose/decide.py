@@ -280,13 +280,14 @@ def choose(
     elif passing:  # only the drift in time
         best = "slow_drift"
         # a column that follows time has shifted copies that follow time too: its surrogates
-        # cannot tell it from a drift, which is the point of naming the confound
+        # cannot tell it from a drift, which is the point of naming the confound; without that
+        # null it needs the floor of a term without one (GAIN_FLOOR, not COLUMN_GAIN_FLOOR)
         confounded = [
             c
             for c in OBSERVED_CAUSES
             if c in scores
             and abs((time_correlation or {}).get(COLUMNS[c], 0.0)) >= CONFOUNDED_R
-            and against_baseline(scores[c], noise, surrogates=False) is None
+            and against_baseline(scores[c], noise, surrogates=False, floor=GAIN_FLOOR) is None
         ]
         if confounded:
             best = max(confounded, key=lambda c: scores[c].mean)

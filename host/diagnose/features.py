@@ -64,6 +64,12 @@ def branch_offset(u: NDArray[np.float64], start: MemoryStart, share: float = 0.1
     threshold = share * float(np.ptp(u))
     thresholds = np.array([threshold])
     z0 = branch_play_state(float(u[0]), thresholds, start.branch)
+    # the play came from the end of the record's range, not from beyond it: an input that starts
+    # just above its minimum on an ascending branch has not yet moved the play off the bottom
+    if start.branch == "ascending":
+        z0 = np.maximum(z0, float(u.min()) + thresholds)
+    elif start.branch == "descending":
+        z0 = np.minimum(z0, float(u.max()) - thresholds)
     return (play_outputs(u, thresholds, z0)[:, 0] - u) / threshold
 
 

@@ -78,6 +78,7 @@ def write_report(d: Diagnosis, directory: str | Path, source: str) -> Path:
     rows = "\n".join(
         f"| {c} | {d.scores[c]:+.1%} | {', '.join(f'{g:+.1%}' for g in d.fold_gains[c])} |" for c in d.fold_gains
     )
+    notes = "".join(f"\nNote: {note}\n" for note in d.notes)
     baseline = {"na": d.baseline_full.na, "ar": [float(a) for a in d.baseline_full.ar], **d.baseline_full.extra}
     text = f"""# Diagnosis of `{source}`
 
@@ -87,7 +88,7 @@ Decided by: {d.decided_by}. Confidence: {json.dumps(d.confidence)}.
 
 Held-out RMSE: baseline {d.baseline_rmse:.4g}, extended {d.extended_rmse:.4g} (gain {d.gain:.0%}).
 Held-out data: {d.holdout}.
-
+{notes}
 ![loops](loops.png)
 
 ## Candidates

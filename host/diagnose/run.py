@@ -132,6 +132,8 @@ class Diagnosis:
             "extended_model": self.extended_model,
             "signatures": self.evidence.get("signatures", {}),
             "notes": self.notes,
+            "start_index": self.start_index,
+            "memory_assumed": self.memory_assumed,
         }
 
 
@@ -176,33 +178,44 @@ def decimated_with_warning(m: Measurement) -> tuple[Measurement, list[str]]:
     return m, [note]
 
 
-def known_memory(m: Measurement, assume_state: bool = True) -> tuple[MemoryStart, list[str]]:
-    """Where the hysteresis memory is known (:func:`memory_start`), or, when the input reaches an
-    end of its range too late to leave :data:`MIN_SAMPLES` after it (a sine of growing amplitude,
-    an excerpt of a longer run), the first sample with an assumed state: the input rose from the
-    record's minimum to its first value (the actuator at rest, vented or at its lowest drive,
-    before the record). The note says so: the first samples' verdict carries that assumption.
-    Without ``assume_state`` such a record is refused (:class:`DataError`)."""
-    start = memory_start(m.u)
-    if m.u.size - start.index >= MIN_SAMPLES:
+def known_memory(
+    u: NDArray[np.float64], source: str, assume_state: bool = True, needed: int = MIN_SAMPLES
+) -> tuple[MemoryStart, list[str]]:
+    """Where the hysteresis memory of input ``u`` is known (:func:`memory_start`), or, when ``u``
+    reaches an end of its range too late to leave ``needed`` samples after it (a sine of growing
+    amplitude, an excerpt of a longer run), the first sample with an assumed state: the input
+    rose from the record's minimum to its first value (the actuator at rest, vented or at its
+    lowest drive, before the record). The note says so: the first samples' verdict carries that
+    assumption. Without ``assume_state`` such a record is refused (:class:`DataError`)."""
+    start = memory_start(u)
+    if u.size - start.index >= needed:
         return start, []
     if not assume_state:
         raise DataError(
-            f"{m.source}: the input reaches the end of its range only at sample {start.index}; "
-            f"fewer than {MIN_SAMPLES} samples remain with a known hysteresis state"
+            f"{source}: the input reaches the end of its range only at sample {start.index}; fewer than "
+            f"{needed} samples (what the folds need, at least {MIN_SAMPLES}) remain with a known hysteresis state"
         )
     note = (
-        f"the input reaches the end of its range only at sample {start.index} of {m.u.size}, so the "
+        f"the input reaches the end of its range only at sample {start.index} of {u.size}, so the "
         "hysteresis state at the start is assumed: the input rose from the record's minimum "
-        f"({float(m.u.min()):g}) to its first value ({float(m.u[0]):g}); start the record at rest "
+        f"({float(u.min()):g}) to its first value ({float(u[0]):g}); start the record at rest "
         "and sweep the full range first to diagnose without this assumption"
     )
     return MemoryStart(0, "ascending"), [note]
 
 
-def prepare(m: Measurement, levels: int, assume_state: bool = True) -> tuple[Context, int, list[str]]:
+def samples_needed(folds: int, blocks_per_fold: int = BLOCKS_PER_FOLD) -> int:
+    """Samples after the memory start that ``folds`` folds of ``blocks_per_fold`` blocks need
+    (:data:`MIN_BLOCK_SAMPLES` each), and at least :data:`MIN_SAMPLES`."""
+    return max(MIN_SAMPLES, folds * blocks_per_fold * MIN_BLOCK_SAMPLES)
+
+
+def prepare(
+    m: Measurement, levels: int, assume_state: bool = True, needed: int = MIN_SAMPLES
+) -> tuple[Context, int, list[str]]:
     """Validate the record and compute the features shared by every fold; also returns the first
-    sample used and the notes on what was assumed (:func:`known_memory`)."""
+    sample used and the notes on what was assumed (:func:`known_memory`; ``needed``: the samples
+    the folds need after the memory start)."""
     if len(m) < MIN_SAMPLES:
         raise DataError(f"{m.source}: {len(m)} samples is too short to diagnose; record at least {MIN_SAMPLES}")
     if np.ptp(m.u) <= 1e-9 * max(1.0, float(np.abs(m.u).max())):
@@ -212,7 +225,7 @@ def prepare(m: Measurement, levels: int, assume_state: bool = True) -> tuple[Con
             f"{m.source}: the output y is constant ({m.y[0]:g}); check the sensor wiring or the column "
             "mapping, there is nothing to diagnose"
         )
-    start, notes = known_memory(m, assume_state)
+    start, notes = known_memory(m.u, m.source, assume_state, needed)
     sl = slice(start.index, None)
     extras = {k: v[sl] for k, v in m.extras.items() if k in ("load", "temperature")}
     lag_rows = {lag: preisach_rows(first_order(m.u, m.dt, lag), start, levels) for lag in ACTUATOR_LAGS_S}
@@ -391,7 +404,7 @@ def _diagnose(
     notes: list[str],
     assume_state: bool,
 ) -> Diagnosis:
-    ctx, start_index, assumed = prepare(m, levels, assume_state)
+    ctx, start_index, assumed = prepare(m, levels, assume_state, samples_needed(folds, blocks_per_fold))
     notes = notes + assumed
     n = ctx.y.size
     check_folds(folds, n, blocks_per_fold)
