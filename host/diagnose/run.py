@@ -1,8 +1,9 @@
 """The diagnosis: baseline vs physically motivated extensions on blocked held-out data.
 
 1. The baseline and each extension (one physical term, :mod:`host.diagnose.candidates`) are
-   identified on the whole record after the first sample where the memory is known: hysteresis
-   jointly with the term.
+   identified on the whole record after the first sample where the memory is known (or from
+   the first sample with an assumed state when that leaves too few: :func:`known_memory`):
+   hysteresis jointly with the term.
 2. That record is cut into ``folds * blocks_per_fold`` contiguous blocks, dealt to the folds in
    turn (:func:`host.diagnose.folds.holdout_masks`). For each fold every model's gain, offset and
    term coefficients are refitted on the other folds' rows and scored (RMSE) on the held-out rows
