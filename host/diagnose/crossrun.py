@@ -202,7 +202,7 @@ def cross_run(
         yhat = simulate(model, rows, float(y[0]))
         outside = float(np.mean((u < grid.lo) | (u > grid.hi)))
         if outside > 0:
-            notes.append(f"{outside:.0%} of the test input lies outside the training range; the model saturates there")
+            notes.append(f"{outside:.1%} of the test input lies outside the training range; the model saturates there")
         if start.index > 0:
             early_rows = rows_on_grid(lagged_u, grid, MemoryStart(0, "descending"))[: start.index]
             early = simulate(model, early_rows, float(test.y[0]))
