@@ -266,6 +266,15 @@ def test_the_branch_an_assumed_state_starts_on_is_the_rise_from_the_records_mini
     assert branch_offset(np.r_[1.0, u[::-1]], MemoryStart(0, "ascending"))[0] == pytest.approx(-1.0)
 
 
+def test_a_record_the_diagnosis_refuses_is_a_counted_miss_in_the_scorecards_not_a_crash():
+    from bench.diagnose_scorecard import diagnosed, line
+
+    t = np.arange(2000) * 0.01
+    row = diagnosed(Measurement(t, np.sin(t), np.full_like(t, 3.0), source="flat"))
+    assert row["verdict"] == "refused" and "output y is constant" in str(row["refusal"])
+    assert line("", "flat", row).startswith("REFUSED")
+
+
 def test_constant_input_is_a_clear_error(tmp_path):
     t = np.arange(2000) * 0.01
     path = write_csv(tmp_path / "flat.csv", zip(t, np.ones_like(t), np.sin(t)))
