@@ -11,7 +11,7 @@ in a hold, rate forms that grow with speed, and each core's loop (closed, 3-20 %
 from __future__ import annotations
 
 from collections import Counter
-from functools import cache
+from functools import cache, partial
 from typing import Any
 
 import numpy as np
@@ -41,6 +41,11 @@ from tests.plants.blind2_family import (
     simulate,
 )
 from tests.plants.blind2_protocols import BLIND2_PROTOCOLS, with_range_check
+from tests.plants.properties import (
+    assert_any_duration_builds,
+    assert_closed_loop_3_to_20_percent_wide,
+    assert_deterministic_by_seed,
+)
 from tests.plants.visibility import EFFECT_MAX_OVER_SPAN, EFFECT_MIN_OVER_NOISE
 
 DURATION_S = 40.0
@@ -184,43 +189,19 @@ def test_rate_forms_grow_with_the_input_speed(plant: str) -> None:
 
 
 def test_measurement_is_deterministic_by_seed() -> None:
-    for case in CASES[::11]:
-        a, ta = blind2_measurement(case)
-        b, tb = blind2_measurement(case)
-        assert np.array_equal(a.y, b.y) and np.array_equal(a.u, b.u) and str(ta) == str(tb)
-        assert np.array_equal(a.extras["temperature"], b.extras["temperature"])
-        assert np.array_equal(a.extras["load"], b.extras["load"])
-    other = family.Case(**{**CASES[0].__dict__, "seed": CASES[0].seed + 1})
-    assert not np.array_equal(blind2_measurement(CASES[0])[0].y, blind2_measurement(other)[0].y)
+    assert_deterministic_by_seed(CASES, blind2_measurement)
 
 
 @pytest.mark.parametrize("duration_s", [40.0, 300.0])
 def test_any_duration_builds(duration_s: float) -> None:
-    case = [c for c in blind2_cases(duration_s) if c.effect != "none"][7]
-    m, truth = blind2_measurement(case)
-    assert len(m) == int(round(duration_s * case.rate_hz)) and np.all(np.isfinite(m.y))
-    assert EFFECT_MIN_OVER_NOISE * truth["noise"] <= truth["effect_size"] <= EFFECT_MAX_OVER_SPAN * truth["span"]
+    assert_any_duration_builds(blind2_cases, blind2_measurement, duration_s)
 
 
 @pytest.mark.parametrize("core", list(BLIND2_CORES))
 def test_core_draws_a_closed_loop_3_to_20_percent_wide_descending_above_ascending(core: str) -> None:
-    for seed in range(3):
-        rng = np.random.default_rng(100 + seed)
-        peak = float(rng.uniform(3.0, 6.0))
-        params = draw_params(core, rng, peak)
-        dt, period = 0.01, 30.0
-        t = np.arange(int(round(3 * period / dt))) * dt
-        u = peak * (0.05 + 0.9 * (1.0 - np.abs(2.0 * ((t / period) % 1.0) - 1.0)))
-        y = BLIND2_CORES[core](u, dt, params)
-        per, span = int(round(period / dt)), float(np.ptp(y[-int(round(period / dt)) :]))
-        assert 10.0 <= span <= 50.0
-        assert np.max(np.abs(y[-per:] - y[-2 * per : -per])) < 0.01 * span
-        grid = np.linspace(0.3, 0.7, 9) * peak
-        cu, cy, half = u[-per:], y[-per:], per // 2
-        up = np.interp(grid, cu[:half], cy[:half])
-        down = np.interp(grid, cu[half:][::-1], cy[half:][::-1])
-        width = float(np.max(down - up)) / span
-        assert np.all(down - up > 0.0) and 0.03 <= width <= 0.2, width
+    assert_closed_loop_3_to_20_percent_wide(
+        BLIND2_CORES[core], partial(draw_params, core), cycles=3, settled_share=0.01
+    )
 
 
 @pytest.mark.parametrize("protocol", list(BLIND2_PROTOCOLS))

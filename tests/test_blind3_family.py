@@ -13,7 +13,7 @@ creep that keeps moving in a hold, rate forms that grow with speed, and each cor
 from __future__ import annotations
 
 from collections import Counter
-from functools import cache
+from functools import cache, partial
 from typing import Any
 
 import numpy as np
@@ -53,6 +53,11 @@ from tests.plants.blind3_family import (
     simulate,
 )
 from tests.plants.blind3_protocols import BLIND3_PROTOCOLS, with_full_sweep
+from tests.plants.properties import (
+    assert_any_duration_builds,
+    assert_closed_loop_3_to_20_percent_wide,
+    assert_deterministic_by_seed,
+)
 from tests.plants.visibility import EFFECT_MAX_OVER_SPAN, EFFECT_MIN_OVER_NOISE
 
 DURATION_S = 40.0
@@ -222,44 +227,17 @@ def test_rate_forms_grow_with_the_input_speed(plant: str) -> None:
 
 
 def test_measurement_is_deterministic_by_seed() -> None:
-    for case in CASES[::11]:
-        a, ta = blind3_measurement(case)
-        b, tb = blind3_measurement(case)
-        assert np.array_equal(a.y, b.y) and np.array_equal(a.u, b.u) and str(ta) == str(tb)
-        assert np.array_equal(a.extras["temperature"], b.extras["temperature"])
-        assert np.array_equal(a.extras["load"], b.extras["load"])
-    other = family.Case(**{**CASES[0].__dict__, "seed": CASES[0].seed + 1})
-    assert not np.array_equal(blind3_measurement(CASES[0])[0].y, blind3_measurement(other)[0].y)
+    assert_deterministic_by_seed(CASES, blind3_measurement)
 
 
 @pytest.mark.parametrize("duration_s", [40.0, 300.0])
 def test_any_duration_builds(duration_s: float) -> None:
-    case = [c for c in blind3_cases(duration_s) if c.effect != "none"][7]
-    m, truth = blind3_measurement(case)
-    assert len(m) == int(round(duration_s * case.rate_hz)) and np.all(np.isfinite(m.y))
-    assert EFFECT_MIN_OVER_NOISE * truth["noise"] <= truth["effect_size"] <= EFFECT_MAX_OVER_SPAN * truth["span"]
+    assert_any_duration_builds(blind3_cases, blind3_measurement, duration_s)
 
 
 @pytest.mark.parametrize("core", list(BLIND3_CORES))
 def test_core_draws_a_closed_loop_3_to_20_percent_wide_descending_above_ascending(core: str) -> None:
-    for seed in range(3):
-        rng = np.random.default_rng(100 + seed)
-        peak = float(rng.uniform(3.0, 6.0))
-        params = draw_params(core, rng, peak)
-        dt, period = 0.01, 30.0
-        t = np.arange(int(round(4 * period / dt))) * dt
-        u = peak * (0.05 + 0.9 * (1.0 - np.abs(2.0 * ((t / period) % 1.0) - 1.0)))
-        y = BLIND3_CORES[core](u, dt, params)
-        per = int(round(period / dt))
-        span = float(np.ptp(y[-per:]))
-        assert 10.0 <= span <= 50.0
-        assert np.max(np.abs(y[-per:] - y[-2 * per : -per])) < 0.02 * span  # stick-slip settles into its cycle
-        grid = np.linspace(0.3, 0.7, 9) * peak
-        cu, cy, half = u[-per:], y[-per:], per // 2
-        up = np.interp(grid, cu[:half], cy[:half])
-        down = np.interp(grid, cu[half:][::-1], cy[half:][::-1])
-        width = float(np.max(down - up)) / span
-        assert np.all(down - up > 0.0) and 0.03 <= width <= 0.2, width
+    assert_closed_loop_3_to_20_percent_wide(BLIND3_CORES[core], partial(draw_params, core))
 
 
 @pytest.mark.parametrize("protocol", list(BLIND3_PROTOCOLS))
