@@ -167,7 +167,7 @@ def _hysteresis(
     return x, model.ar
 
 
-def _with_columns(ctx: Context, name: str, columns: NDArray[np.float64], labels: list[str], **extra: float) -> Design:
+def with_columns(ctx: Context, name: str, columns: NDArray[np.float64], labels: list[str], **extra: float) -> Design:
     """A term of ``columns`` whose hysteresis is refitted jointly with it on every row.
 
     Not nested in the baseline: the ridge on the cell masses does not act on the columns, so a
@@ -201,7 +201,7 @@ def _rate_weight(ctx: Context) -> Design:
     r = np.minimum(speed / (float(np.percentile(speed, 95)) or 1.0), 3.0)
     xn = _normalised(ctx.x)
     columns = np.column_stack([ctx.branch * r, xn * r, r])
-    return _with_columns(ctx, "rate_dependence", columns, ["branch*speed", "x*speed", "speed"], form=1.0)
+    return with_columns(ctx, "rate_dependence", columns, ["branch*speed", "x*speed", "speed"], form=1.0)
 
 
 def rate_dependence(ctx: Context) -> Design:
@@ -236,7 +236,7 @@ def _creep_spectrum(ctx: Context, sign: float) -> Design:
     taus = [tau for tau in CREEP_SPECTRUM_S if tau <= 0.5 * ctx.y.size * ctx.dt] or [CREEP_SPECTRUM_S[0]]
     while taus:
         columns = np.column_stack([slow_part(ctx.x, ctx.dt, tau) for tau in taus])
-        candidate = _with_columns(ctx, "creep", columns, [f"creep_{tau:g}s" for tau in taus])
+        candidate = with_columns(ctx, "creep", columns, [f"creep_{tau:g}s" for tau in taus])
         model = candidate.fit(ctx, every)
         shares = model.exogenous[model.nb : model.nb + len(taus)] / (model.exogenous[0] or 1.0)
         if np.all(sign * shares >= 0):
@@ -301,7 +301,7 @@ def _column_terms(ctx: Context, name: str, v: NDArray[np.float64], label: str) -
     offset was left to whatever slow term came next (a creep, a drift)."""
     xn = _normalised(ctx.x)
     columns = np.column_stack([v, v * xn, v * xn**2, v * ctx.branch, v * v])
-    model = _with_columns(ctx, name, columns, [label, f"{label}*x", f"{label}*x^2", f"{label}*branch", f"{label}^2"])
+    model = with_columns(ctx, name, columns, [label, f"{label}*x", f"{label}*x^2", f"{label}*branch", f"{label}^2"])
     model.source = v
     return model
 

@@ -168,6 +168,25 @@ def floor_for(cause: str) -> float:
     return COLUMN_GAIN_FLOOR if cause in OBSERVED_CAUSES else GAIN_FLOOR
 
 
+def detection_limit(baseline_rmse: float, noise: float, floor: float) -> float:
+    """The smallest RMS [units of y] an effect's own part (what the baseline cannot absorb) must
+    have to be named on a record whose baseline misses by ``baseline_rmse`` on held-out rows.
+
+    An effect adds a part of RMS ``e``, uncorrelated with that error, to it: the baseline then
+    misses by ``sqrt(B^2 + e^2)`` and a term that explains exactly that part is back at ``B``. It
+    passes :func:`against_baseline` at ``floor`` when ``1 - B / sqrt(B^2 + e^2) >= floor``, i.e.
+    ``e >= B sqrt(1 / (1 - floor)^2 - 1)``, and when it lowers the error by :data:`NOISE_SHARE`
+    times the noise, ``e >= sqrt((B + NOISE_SHARE noise)^2 - B^2)``; the larger of the two.
+
+    An effect larger than this can still go unseen when the baseline absorbs it (a creep that
+    repeats every cycle is loop shape to a Preisach model); ``bench/diagnose_ceiling.py``
+    measures how often that happens on the test plants."""
+    base = max(float(baseline_rmse), 0.0)
+    by_floor = base * float(np.sqrt(1.0 / (1.0 - floor) ** 2 - 1.0))
+    by_noise = float(np.sqrt((base + NOISE_SHARE * noise) ** 2 - base**2))
+    return max(by_floor, by_noise)
+
+
 def against_baseline(
     s: CandidateScore, noise: float, surrogates: bool = True, floor: float | None = None
 ) -> str | None:

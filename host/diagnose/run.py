@@ -50,8 +50,11 @@ from host.diagnose.candidates import (
 )
 from host.diagnose.decide import (
     BLOWUP_RATIO,
+    COLUMN_GAIN_FLOOR,
+    GAIN_FLOOR,
     CandidateScore,
     choose,
+    detection_limit,
     distinct,
     drift_would_be_named,
     with_signatures,
@@ -63,7 +66,7 @@ from host.diagnose.hammerstein import FittedModel, fit_hammerstein, rmse
 from host.diagnose.signatures import signatures
 from host.identify.common import MemoryStart, memory_start
 
-__all__ = ["CAUSES", "Diagnosis", "diagnose", "prepare"]
+__all__ = ["CAUSES", "Diagnosis", "diagnose", "held_out_score", "prepare"]
 
 # first-order actuator (valve + mechanics) lag before the hysteresis, part of the baseline's
 # dynamics (seed 004: a PAM is a first-order lag plus a dead time); up to 250 ms, so that a plant
@@ -362,14 +365,28 @@ def _surrogate_gains(
         surrogate = make(shifted_copies(column, 1, rng)[0])
         if surrogate is None:
             continue
-        score = CandidateScore(cause)
-        for held, base in zip(masks, base_folds):
-            pair = _fold_errors(ctx, {cause: surrogate}, held, base)[cause]
-            if pair is not None and np.isfinite(pair[0]):
-                score.add(pair[0], pair[1])
+        score = held_out_score(ctx, cause, surrogate, masks, base_folds)
         if not score.failed and score.gains:
             out.append(score.mean)
     return out
+
+
+def held_out_score(
+    ctx: Context,
+    name: str,
+    d: Design,
+    masks: list[NDArray[np.bool_]],
+    base_folds: list[NDArray[np.float64]],
+) -> CandidateScore:
+    """``d``'s held-out record over the folds (``masks``: held-out rows per fold; ``base_folds``:
+    the baseline's prediction fitted on each fold's training rows), by the candidates' own rules:
+    a fold with too few rows ``d`` can be judged on is skipped, a blown-up fit is a failed fold."""
+    score = CandidateScore(name)
+    for held, base in zip(masks, base_folds):
+        pair = _fold_errors(ctx, {name: d}, held, base)[name]
+        if pair is not None and np.isfinite(pair[0]):
+            score.add(pair[0], pair[1])
+    return score
 
 
 def _column_nulls(
@@ -468,6 +485,7 @@ def _diagnose(
     }
     verdict = distinct(with_signatures(choose(scores, noise, time_correlation), scores, found, noise), scores)
     cause = verdict.cause
+    limits = detection_limits(ctx, masks, base_folds, noise)
     chosen = designs.get(cause) if cause != "none" else None
     extended_full = chosen.fit(ctx, np.ones(n, dtype=bool)) if chosen is not None else None
     evidence = baseline_evidence(baseline_full.prediction - ctx.y, ctx.u, ctx.rate, ctx.extras, ctx.dt)
@@ -483,6 +501,8 @@ def _diagnose(
             )
         else:
             reason += "; the baseline's residual is white: what remains looks like noise"
+    if cause == "none":
+        reason += "; " + limit_sentence(limits)
     # the baseline's held-out error on the rows of the named cause (every row when none is named:
     # the rate-dependence term is judged on all held-out rows)
     memory = "its hysteresis state assumed, see notes" if assumed else "where the hysteresis memory is known"
@@ -505,7 +525,7 @@ def _diagnose(
         extended_model=_describe(extended_full, ctx) if extended_full else {"name": "baseline (no extension)"},
         reason=reason,
         decided_by=verdict.decided_by,
-        confidence=verdict.confidence,
+        confidence={**verdict.confidence, "detection_limit": limits},
         fold_gains={c: s.all_gains for c, s in scores.items()},
         column_surrogates={
             c: {"p_value": s.surrogate_p, "mean_gains": s.null_gains} for c, s in scores.items() if s.null_gains
@@ -517,6 +537,32 @@ def _diagnose(
         context=ctx,
         notes=notes,
         memory_assumed=bool(assumed),
+    )
+
+
+def detection_limits(
+    ctx: Context, masks: list[NDArray[np.bool_]], base_folds: list[NDArray[np.float64]], noise: float
+) -> dict[str, float]:
+    """The smallest error of its own [units of y] an effect must leave beside the baseline to be
+    named on this record (:func:`host.diagnose.decide.detection_limit`), for a dynamic term and for
+    a measured column (which has a lower floor), from the baseline's held-out RMSE on every
+    held-out row; with the output's range to read them against."""
+    base = float(np.mean([rmse(b[held], ctx.y[held]) for held, b in zip(masks, base_folds)]))
+    return {
+        "dynamic_term": detection_limit(base, noise, GAIN_FLOOR),
+        "measured_column": detection_limit(base, noise, COLUMN_GAIN_FLOOR),
+        "baseline_rmse": base,
+        "output_range": float(np.ptp(ctx.y)),
+    }
+
+
+def limit_sentence(limits: dict[str, float]) -> str:
+    """What :func:`detection_limits` means for a ``none``, in one clause."""
+    share = limits["dynamic_term"] / (limits["output_range"] or 1.0)
+    return (
+        f"to be named here, an effect would have to leave an error of its own (one the rate-independent "
+        f"model cannot absorb) of at least {limits['dynamic_term']:.3g} RMS ({share:.1%} of the output's range), "
+        f"{limits['measured_column']:.3g} through a load or temperature column; smaller effects may be present"
     )
 
 
