@@ -3,22 +3,22 @@
 Rate dependence: a *tempered springpot* in the braid (a fractional viscoelastic element,
 ``K (x - y) = eta s (s + w_c)^(alpha - 1) y``: a lag that grows as ``w^alpha`` above the
 tempering frequency and is viscous below it, applied exactly in the frequency domain); the
-lubricant's *thixotropy* (a structure parameter broken down by the braid's motion and rebuilt at
-rest, Moore's model, so the friction that makes the loop drops at fast rates and returns after a
-rest). Creep: a Kelvin creep towards ``v^n`` with a *direction-dependent* time constant (quick
-under rising stress, 2-8 x slower recovery); *Fickian* gas sorption swelling the bladder (Henry's
-law: the equilibrium is proportional to the pressure; the kernel is the diffusion series, which
-goes as sqrt(t) at first), superposed over the pressure history. Transport delay: an *exhaust
-pilot* that opens the vent only after a dead time, so only deflation is delayed (the muscle sees
-the running maximum of the set pressure over the dead time); the stroke transducer's firmware
-*median* despiking filter over its last 60-200 ms (a dead time of half the window on every
-monotone stretch). Load dependence: a slack rope linkage whose *slack the payload takes up*
-(the share held against one flank grows with the payload, so only the descending branch moves);
-a *Fung* (exponentially stiffening) tendon strap carrying the payload and the return spring.
-Temperature drift: the bladder's *onset softening* (a warmer bladder needs less pressure to
-start the braid, a shift of the input that vanishes vented and at the top, after a 15-60 s
-thermal lag); the sleeve's thermal expansion changing the stroke gain through a *two-node*
-thermal network (air to bladder to braid).
+lubricant's *thixotropy* (a structure parameter broken down by the braid's motion, at a rate
+growing with the square of the speed, and rebuilt at rest in 1-4 s, so the friction that makes
+the loop drops at fast rates and returns after a rest). Creep: a Kelvin creep towards ``v^n``
+with a *direction-dependent* time constant (quick under rising stress, 2-8 x slower recovery);
+*Fickian* gas sorption swelling the bladder (Henry's law: the equilibrium is proportional to the
+pressure; the kernel is the diffusion series, which goes as sqrt(t) at first), superposed over
+the pressure history. Transport delay: an *exhaust pilot* that opens the vent only after a dead
+time, so only deflation is delayed (the muscle sees the running maximum of the set pressure
+over the dead time); the stroke transducer's firmware *median* despiking filter over its last
+60-200 ms (a dead time of half the window on every monotone stretch). Load dependence: a slack
+rope linkage whose *slack the payload takes up* (the share held against one flank grows with
+the payload, so only the descending branch moves); a *Fung* (exponentially stiffening) tendon
+strap carrying the payload and the return spring. Temperature drift: the bladder's *onset
+softening* (a warmer bladder needs less pressure to start the braid, a shift of the input that
+vanishes vented and at the top, after an 8-30 s thermal lag); the sleeve's thermal expansion
+changing the stroke gain through a *two-node* thermal network (air to bladder to braid).
 
 Load [kg] and temperature [degC] columns always move; when they are not the effect they are
 decoys. Load: parcels arriving on a tray that is emptied when full (the load cell rings after
@@ -60,6 +60,7 @@ INTENSITY_KEY: dict[str, str] = {  # the parameter that scales each form's size
     "onset_softening": "onset_share_per_k",
     "two_node_sleeve": "gain_per_k",
 }
+THIXO_REF_SPEED = 0.2  # [peak/s] the speed at which the breakdown rate is ``b``
 MAX_WINDOW_S = 0.6  # the longest dead time / filter window the firmware allows
 
 
@@ -143,8 +144,8 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
     """The drawn constants of ``effect`` in ``form`` (units in the key names or below)."""
     if form == "tempered_springpot":  # eta / K [s^alpha]; order; tempering frequency [Hz]
         return {"theta_s": rng.uniform(0.08, 0.3), "alpha": rng.uniform(0.3, 0.6), "temper_hz": rng.uniform(0.3, 1.0)}
-    if form == "thixotropic_grease":  # breakdown per full-range travel; rebuild time [s]; friction share lost
-        return {"breakdown": rng.uniform(4.0, 12.0), "rebuild_s": rng.uniform(2.0, 8.0), "loss": rng.uniform(0.6, 0.9)}
+    if form == "thixotropic_grease":  # breakdown rate [1/s] at 0.2 peak/s; rebuild time [s]; friction share lost
+        return {"breakdown": rng.uniform(1.0, 3.0), "rebuild_s": rng.uniform(1.0, 4.0), "loss": rng.uniform(0.6, 0.9)}
     if form == "slow_recovery_kelvin":  # share of span at full pressure; stress exponent; times [s]
         up = rng.uniform(6.0, 20.0)
         return {
@@ -194,9 +195,10 @@ def tempered_springpot(x: Array, dt_s: float, q: dict[str, float]) -> Array:
 
 
 def thixotropy_width(u: Array, dt_s: float, q: dict[str, float], peak: float) -> Array:
-    """Friction factor ``1 - loss (1 - lambda)``: ``dlambda/dt = (1 - lambda) / T_b - b r lambda``
-    with ``r`` the speed of the set pressure [peak/s] (exact per sample); 1 at rest."""
-    speed = np.abs(np.gradient(u, dt_s)) / peak
+    """Friction factor ``1 - loss (1 - lambda)``: ``dlambda/dt = (1 - lambda) / T_b - b (r /
+    r_0)^2 lambda`` with ``r`` the speed of the set pressure [peak/s], ``r_0`` = 0.2 peak/s (the
+    breakdown grows with the square of the shear rate; exact per sample); 1 at rest."""
+    speed = (np.abs(np.gradient(u, dt_s)) / peak / THIXO_REF_SPEED) ** 2
     out = np.empty_like(u)
     lam, rebuild, b = 1.0, 1.0 / q["rebuild_s"], q["breakdown"]
     for i, r in enumerate(speed.tolist()):

@@ -25,7 +25,7 @@ makes sure the size lies in ``[5 x noise, 12 % of span]`` (its rescale recorded 
 Confounds in every record, effect-free ones too (:mod:`tests.plants.blind5_rig`): the supply
 regulator's lag (25-70 ms) and its diaphragm's play (0.4-1.2 % of the peak), a pressure
 transducer gain error (0.6-2 %) and offset in the recorded input, the mount settling
-0.02-0.06 mm over 15-40 s, aliased mains hum of 4-12 um, 0.1-0.4 % dropped DAQ frames repeated on
+0.015-0.04 mm over 15-40 s, aliased mains hum of 4-12 um, 0.1-0.4 % dropped DAQ frames repeated on
 every channel; stroke noise 0.012-0.03 mm and a reading step of 0.01-0.03 mm per plant; load
 (read to 0.01 kg) and temperature (read to 0.02 K) columns that always move and act only in
 their own effect's records. The table of every case: ``python -m tests.plants.blind5_family 100``.
@@ -113,7 +113,8 @@ def calibrate(render_on: Callable[[], Array], off: Array, q: dict[str, float], k
 
 
 def simulate(case: Case) -> dict[str, Any]:
-    """Noise-free outputs with and without the effect, the recorded input, the columns and the truth."""
+    """Noise-free outputs with and without the effect, the recorded input (the transducer's
+    reading of the set pressure ``command`` [bar] the plant got), the columns and the truth."""
     if case.plant not in BLIND5_CORES:
         raise KeyError(f"unknown blind5 plant {case.plant!r}; known: {', '.join(BLIND5_CORES)}")
     rng = np.random.default_rng(case.seed)
@@ -150,7 +151,8 @@ def simulate(case: Case) -> dict[str, Any]:
         calibrate(with_effect, off, q, key, target)
     on, truth = visible_effect(case.effect, case.form, with_effect, off, noise, q, key, 1.3, params, patterns)
     u_read = transducer_reading(u, params)
-    return {"t": t, "u": u_read, "on": on, "off": off, "load": load, "temperature": temperature, "truth": truth}
+    sim = {"t": t, "u": u_read, "command": u, "on": on, "off": off, "load": load, "temperature": temperature}
+    return {**sim, "truth": truth}
 
 
 def measurement_from(case: Case, sim: dict[str, Any]) -> tuple[Measurement, dict[str, Any]]:

@@ -6,7 +6,7 @@ peak pressure). The recorded input is the pressure transducer's reading of the c
 (:func:`transducer_reading`): a gain error of +-0.6-2 % and an offset of +-5-15 mbar.
 
 Stroke side (:func:`stroke_reading`): the mount settling slowly under the muscle after it is
-clamped (an exponential sag of 0.02-0.06 mm over 15-40 s) and mains hum on the transducer's
+clamped (an exponential sag of 0.015-0.04 mm over 15-40 s) and mains hum on the transducer's
 cable (0.004-0.012 mm at 49.95-50.05 Hz, sampled at the record's rate, so aliased below
 100 Hz). In the recording (:func:`dropped_frames`) the DAQ now and then drops 1-3 frames and
 repeats the last one on every channel (0.1-0.4 % of the frames).
@@ -80,9 +80,9 @@ def draw_rig(rng: np.random.Generator, peak: float) -> dict[str, float]:
         "peak": peak,
         "tau_reg_s": rng.uniform(0.025, 0.07),
         "reg_play_share": rng.uniform(0.004, 0.012),
-        "p_gain_error": rng.choice([-1.0, 1.0]) * rng.uniform(0.006, 0.02),
-        "p_offset_bar": rng.choice([-1.0, 1.0]) * rng.uniform(0.005, 0.015),
-        "settle_mm": rng.uniform(0.02, 0.06),
+        "p_gain_error": float(rng.choice([-1.0, 1.0]) * rng.uniform(0.006, 0.02)),
+        "p_offset_bar": float(rng.choice([-1.0, 1.0]) * rng.uniform(0.005, 0.015)),
+        "settle_mm": rng.uniform(0.015, 0.04),
         "settle_tau_s": rng.uniform(15.0, 40.0),
         "hum_mm": rng.uniform(0.004, 0.012),
         "mains_hz": rng.uniform(49.95, 50.05),
