@@ -56,7 +56,7 @@ INTENSITY_KEY: dict[str, str] = {  # the parameter that scales each form's size
     "exhaust_pilot": "pilot_s",
     "median_despike": "window_s",
     "slack_takeup": "takeup_gain",
-    "fung_tendon": "load_scale",
+    "fung_tendon": "strap_length",
     "onset_softening": "onset_share_per_k",
     "two_node_sleeve": "gain_per_k",
 }
@@ -81,7 +81,8 @@ def load_parcel_tray(t: Array, rng: np.random.Generator) -> Array:
         parcels += change
         s = t - now
         edge = np.clip(s / 0.2, 0.0, 1.0)
-        ring = np.where(s > 0.2, np.exp(-(s - 0.2) / decay) * np.sin(2 * np.pi * f_ring * (s - 0.2)), 0.0)
+        after = np.clip(s - 0.2, 0.0, None)
+        ring = np.where(s > 0.2, np.exp(-after / decay) * np.sin(2 * np.pi * f_ring * after), 0.0)
         out += change * (edge + 0.3 * ring)
         now += float(rng.uniform(3.0, 12.0))
     return out
@@ -167,8 +168,8 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
             "takeup_gain": 1.0,
             "half_kg": rng.uniform(1.0, 3.0),
         }
-    if form == "fung_tendon":  # initial stiffness [N/mm]; stiffening [1/N]; factor on the payload's change
-        return {"k0_n_mm": rng.uniform(8.0, 25.0), "stiffening_per_n": rng.uniform(0.01, 0.04), "load_scale": 1.0}
+    if form == "fung_tendon":  # initial stiffness [N/mm] and stiffening [1/N] of a unit strap; its length (x unit)
+        return {"k0_n_mm": rng.uniform(8.0, 25.0), "stiffening_per_n": rng.uniform(0.01, 0.04), "strap_length": 1.0}
     if form == "onset_softening":  # onset shift [share of peak per K]; bladder lag [s]
         return {"onset_share_per_k": rng.uniform(0.006, 0.02), "bladder_tau_s": rng.uniform(8.0, 30.0)}
     if form == "two_node_sleeve":  # stroke gain [1/K] (negative: warmer, less stroke); lags [s]
@@ -302,10 +303,10 @@ def render(
         x = slack_takeup(x, share, q["slack_mm"])
     elif form == "fung_tendon":
         k0, b = q["k0_n_mm"], q["stiffening_per_n"]
-        payload = load[0] + q["load_scale"] * (load - load[0])
-        tension = G_MS2 * np.clip(payload, 0.0, None) + params["k_load_n_mm"] * x
+        tension = G_MS2 * np.clip(load, 0.0, None) + params["k_load_n_mm"] * x
         rest = G_MS2 * max(float(load[0]), 0.0) + params["k_load_n_mm"] * x
-        x = x - (np.log1p(b * tension / k0) - np.log1p(b * rest / k0)) / b
+        # the stretch of a strap ``length`` units long: ``length ln(1 + b T / k0) / b``
+        x = x - q["strap_length"] * (np.log1p(b * tension / k0) - np.log1p(b * rest / k0)) / b
     elif form == "two_node_sleeve":
         braid = lowpass(lowpass(temperature, dt_s, q["air_tau_s"]), dt_s, q["braid_tau_s"])
         x = x * (1.0 + q["gain_per_k"] * (braid - temperature[0]))

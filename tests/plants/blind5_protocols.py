@@ -4,7 +4,7 @@ What a lab characterising muscles for wearable assist and grippers would run: an
 pressure *ladder* (3-6 equal rungs up to the top and back down, each held 2-10 s, the number of
 rungs and the top redrawn per ladder); minor loops riding on a major one (a slow triangle plus a
 faster sine of 6-14 % of the range); a pedal-assist profile (one half-sine push per crank
-revolution, the cadence wandering between 40 and 100 rpm, the push's effort redrawn per stroke,
+revolution, the cadence wandering between 30 and 75 rpm, the push's effort redrawn per stroke,
 coasting pauses vented); pick-and-place gripper cycles (fill towards an object's grip
 pressure, hold while carrying, sometimes a re-grip squeeze, vent, idle); and blocks of
 trapezoidal cycles with dwells at the top and the bottom, each block with its own levels and
@@ -65,18 +65,18 @@ def riding_minor_loops(duration_s: float, dt_s: float, peak: float, rng: np.rand
 
 def pedal_assist(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """One push per crank revolution: ``effort sin(pi f / duty)^1.5`` over the first 35-50 % of
-    the revolution, vented for the rest; the cadence wanders (Ornstein-Uhlenbeck, 10 s, around
-    55-80 rpm, held in 40-100 rpm), the effort 0.45-1 ``peak`` is redrawn per revolution, and
+    the revolution, vented for the rest; the cadence wanders (Ornstein-Uhlenbeck, 10 s, 8 rpm, around
+    40-60 rpm, held in 30-75 rpm: rehabilitation cycling), the effort 0.45-1 ``peak`` is redrawn per revolution, and
     every 15-40 s the rider coasts 2-6 s (vented)."""
     t = _t(duration_s, dt_s)
-    mean = float(rng.uniform(55.0, 80.0))
+    mean = float(rng.uniform(40.0, 60.0))
     a = float(np.exp(-dt_s / 10.0))
-    kicks = rng.normal(0.0, 12.0 * np.sqrt(1.0 - a * a), t.size)
+    kicks = rng.normal(0.0, 8.0 * np.sqrt(1.0 - a * a), t.size)
     cadence = np.empty_like(t)
     c = mean
     for i, k in enumerate(kicks.tolist()):
         c = mean + a * (c - mean) + k
-        cadence[i] = min(max(c, 40.0), 100.0)
+        cadence[i] = min(max(c, 30.0), 75.0)
     coasting = np.zeros(t.size, dtype=bool)
     now = float(rng.uniform(15.0, 40.0))
     while now < duration_s:
