@@ -5,9 +5,10 @@ forms, protocols, rates, column patterns, seeds; every protocol-rate pair; each 
 several protocols and rates), determinism by seed, finite quantised records with monotone time,
 every effect visible (>= 5x noise) yet modest (<= 12 % of span) and sizes spread over the band,
 columns that move in every record and do nothing unless they are the effect (and do something
-when they are), the rig's confounds in effect-free records, the memory known early, delays
-that lag, creep that keeps moving in a hold, rate forms that grow with speed, and each core's
-loop (closed, 3-20 % wide, descending above ascending).
+when they are), the rig's confounds in effect-free records (dropped frames repeated on every channel), the
+memory known early, delays that lag (the exhaust pilot only on deflation), creep that keeps
+moving in a hold, rate forms that grow with speed, the slack take-up moving only the descending
+branch, and each core's loop (closed, 3-20 % wide, descending above ascending).
 """
 
 from __future__ import annotations
@@ -60,7 +61,7 @@ from tests.plants.blind5_family import (
     simulate,
 )
 from tests.plants.blind5_protocols import BLIND5_PROTOCOLS, with_valve_sweep
-from tests.plants.blind5_rig import regulator, stroke_reading, transducer_reading
+from tests.plants.blind5_rig import dropped_frames, regulator, stroke_reading, transducer_reading
 from tests.plants.properties import (
     assert_any_duration_builds,
     assert_closed_loop_3_to_20_percent_wide,
@@ -306,3 +307,32 @@ def test_protocols_start_vented_sweep_the_range_early_and_then_keep_covering_it(
     assert np.ptp(body) > 0.5 * peak
     crossings = np.count_nonzero(np.diff(np.sign(body - 0.5 * peak)) != 0)
     assert crossings >= 2  # the range is covered again, not once
+
+
+def test_dropped_frames_repeat_the_frame_before_on_every_channel() -> None:
+    case = next(c for c in CASES if c.effect == "none")
+    sim = _simulated(case)
+    m, truth = measurement_from(case, sim)
+    drops = dropped_frames(
+        len(m), np.random.default_rng(case.seed + SEED_OFFSET + 1), truth["plant_parameters"]["drop_share"]
+    )
+    assert drops.size == truth["dropped_frames"] >= 1
+    for column in (m.y, m.u, m.extras["load"], m.extras["temperature"]):
+        assert np.array_equal(column[drops], column[drops - 1])
+    assert np.array_equal(m.t, sim["t"])  # the time stamps stay uniform
+
+
+def test_slack_takeup_moves_only_the_descending_branch() -> None:
+    dt, peak = 0.005, 4.0
+    t = np.arange(int(round(40.0 / dt))) * dt
+    u = peak * (0.1 + 0.8 * (1.0 - np.abs(2.0 * ((t / 10.0) % 1.0) - 1.0)))
+    params = draw_params("rolling_lobe_peel", np.random.default_rng(4), peak)
+    q = draw_effect_params("load_dependence", "slack_takeup", np.random.default_rng(4))
+    load, temps = np.where(t < 10.0, 0.5, 3.0), np.full_like(u, 21.0)
+    core = BLIND5_CORES["rolling_lobe_peel"]
+    diff = render(core, params, u, dt, "slack_takeup", q, load, temps)
+    diff -= render(core, params, u, dt, "slack_takeup", q, np.full_like(load, 0.5), temps)
+    phase = (t / 10.0) % 1.0
+    late = t > 12.0
+    rising, falling = late & (phase > 0.25) & (phase < 0.45), late & (phase > 0.75) & (phase < 0.95)
+    assert np.max(np.abs(diff[rising])) < 1e-9 and np.min(diff[falling]) < -0.1  # mm: heavier, lower way down
