@@ -1,6 +1,6 @@
 """Scorecard of ``pmactl diagnose`` on the test plants: the tuning set and the fresh held-out set.
 
-Usage: python bench/diagnose_scorecard.py [--set tuning|fresh|blind|blind2|blind3|blind4|both|all] [--duration S]
+Usage: python bench/diagnose_scorecard.py [--set tuning|fresh|blind|blind2|blind3|blind4|blind5|both|all] [--duration S]
        [--only TEXT] [--json OUT]
 
 Prints one line per record (plant, effect:form, protocol, rate, verdict, confidence, held-out
@@ -14,7 +14,8 @@ looking at the method, to be scored once; it has been scored three times and was
 blind2 (tests/plants/blind2_family.py: four more cores, forms, protocols and rates, built blind
 too), scored once for v6 and then used with the others to calibrate v7's gain floor; blind3
 (tests/plants/blind3_family.py, built blind for v7) is the set v7 was scored on once, and
-blind4 (tests/plants/blind4_family.py, built blind for v8) the set v8 was scored on once.
+blind4 (tests/plants/blind4_family.py, built blind for v8) the set v8 was scored on once, and
+blind5 (tests/plants/blind5_family.py, built blind for v9) the set v9 was scored on once.
 ``both`` is tuning + fresh; ``all`` adds the blind sets.
 """
 
@@ -40,6 +41,7 @@ from host.diagnose.run import diagnose  # noqa: E402
 from tests.plants.blind2_family import blind2_cases, blind2_measurement  # noqa: E402
 from tests.plants.blind3_family import blind3_cases, blind3_measurement  # noqa: E402
 from tests.plants.blind4_family import blind4_cases, blind4_measurement  # noqa: E402
+from tests.plants.blind5_family import blind5_cases, blind5_measurement  # noqa: E402
 from tests.plants.blind_family import blind_cases, blind_measurement  # noqa: E402
 from tests.plants.family import Case, measurement, tuning_cases  # noqa: E402
 from tests.plants.fresh_family import fresh_cases, fresh_measurement  # noqa: E402
@@ -51,6 +53,7 @@ SETS = {
     "blind2": (blind2_cases, blind2_measurement),
     "blind3": (blind3_cases, blind3_measurement),
     "blind4": (blind4_cases, blind4_measurement),
+    "blind5": (blind5_cases, blind5_measurement),
 }
 
 
