@@ -37,7 +37,7 @@ def _record(load_effect_rms: float) -> Measurement:
     (steps unrelated to the input and to time) moves the output by ``load_effect_rms`` RMS."""
     rng = np.random.default_rng(5)
     dt = 0.02
-    t = np.arange(int(120 / dt)) * dt
+    t = np.arange(int(120 / dt), dtype=np.float64) * dt
     u = 2.5 + 2.0 * np.sin(2 * np.pi * 0.07 * t) * (0.6 + 0.4 * np.sin(2 * np.pi * 0.011 * t))
     y = 8.0 * play_outputs(u, np.array([0.12, 0.4]), np.array([u[0], u[0]])).sum(axis=1)
     changes = np.sort(rng.uniform(0, t[-1], 14))

@@ -561,7 +561,7 @@ def limit_sentence(limits: dict[str, float]) -> str:
     share = limits["dynamic_term"] / (limits["output_range"] or 1.0)
     return (
         f"to be named here, an effect would have to leave an error of its own (one the rate-independent "
-        f"model cannot absorb) of at least {limits['dynamic_term']:.3g} RMS ({share:.1%} of the output's range), "
+        f"model cannot absorb) of at least {limits['dynamic_term']:.3g} RMS in y's units ({share:.1%} of y's range), "
         f"{limits['measured_column']:.3g} through a load or temperature column; smaller effects may be present"
     )
 
