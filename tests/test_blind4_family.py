@@ -61,6 +61,8 @@ from tests.plants.properties import (
     assert_any_duration_builds,
     assert_closed_loop_3_to_20_percent_wide,
     assert_deterministic_by_seed,
+    slow_and_fast_triangles,
+    step_and_hold,
 )
 from tests.plants.visibility import EFFECT_MAX_OVER_SPAN, EFFECT_MIN_OVER_NOISE
 
@@ -201,17 +203,12 @@ def test_delay_forms_lag_the_effect_free_output() -> None:
         assert lags[int(np.argmin(misfit))] > 0, case.name
 
 
-def _step_hold(peak: float, dt: float) -> np.ndarray:
-    t = np.arange(int(round(60.0 / dt))) * dt
-    return np.where(t < 2.0, 0.0, np.where(t < 30.0, 0.7 * peak, 0.3 * peak))
-
-
 @pytest.mark.parametrize("plant", BLIND4_PLANTS)
 def test_creep_forms_keep_moving_in_a_hold_and_the_core_alone_settles(plant: str) -> None:
     rng = np.random.default_rng(5)
     dt, peak = 0.01, 4.0
     params = draw_params(plant, rng, peak)
-    u = _step_hold(peak, dt)
+    u = step_and_hold(peak, dt)
     base = BLIND4_CORES[plant](u, dt, params)
     span = float(np.ptp(base))
     i10, i28 = int(10.0 / dt), int(28.0 / dt)
@@ -232,9 +229,7 @@ def test_rate_forms_grow_with_the_input_speed(plant: str) -> None:
     for form in BLIND4_FORMS["rate_dependence"]:
         q = draw_effect_params("rate_dependence", form, rng)
         sizes = []
-        for period in (40.0, 4.0):
-            t = np.arange(int(round(2 * period / dt))) * dt
-            u = peak * (0.1 + 0.8 * (1.0 - np.abs(2.0 * ((t / period) % 1.0) - 1.0)))
+        for u in slow_and_fast_triangles(peak, dt):
             temps, loads = np.full_like(u, 22.0), np.zeros_like(u)
             off = render(BLIND4_CORES[plant], params, u, dt, "none", q, loads, temps)
             on = render(BLIND4_CORES[plant], params, u, dt, form, q, loads, temps)

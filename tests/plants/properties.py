@@ -1,4 +1,4 @@
-"""Property checks every blind plant family's tests make the same way (blind2, blind3, blind4).
+"""Property checks every blind plant family's tests make the same way (blind2 to blind5).
 
 Each family has its own cores, effects and protocols; what a record of any of them must satisfy
 (built the same for the same seed, any duration, a core's loop a plausible muscle loop) is
@@ -70,3 +70,22 @@ def assert_closed_loop_3_to_20_percent_wide(
         down = np.interp(grid, cu[half:][::-1], cy[half:][::-1])
         width = float(np.max(down - up)) / span
         assert np.all(down - up > 0.0) and 0.03 <= width <= 0.2, width
+
+
+def step_and_hold(peak: float, dt: float) -> NDArray[np.float64]:
+    """60 s of input [bar]: vented for 2 s, a step to 70 % of ``peak`` held until 30 s, then a
+    step down to 30 % held: where creep shows and a rate-independent core settles."""
+    t = np.arange(int(round(60.0 / dt)), dtype=np.float64) * dt
+    return np.where(t < 2.0, 0.0, np.where(t < 30.0, 0.7 * peak, 0.3 * peak))
+
+
+def slow_and_fast_triangles(
+    peak: float, dt: float, periods_s: tuple[float, ...] = (40.0, 4.0)
+) -> list[NDArray[np.float64]]:
+    """Two cycles of a triangle between 10 % and 90 % of ``peak`` [bar] at each period: the same
+    loop slow and fast, for checking that a rate effect grows with the input speed."""
+    out = []
+    for period in periods_s:
+        t = np.arange(int(round(2 * period / dt)), dtype=np.float64) * dt
+        out.append(peak * (0.1 + 0.8 * (1.0 - np.abs(2.0 * ((t / period) % 1.0) - 1.0))))
+    return out
