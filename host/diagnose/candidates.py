@@ -168,7 +168,9 @@ def _hysteresis(
 
 
 def with_columns(ctx: Context, name: str, columns: NDArray[np.float64], labels: list[str], **extra: float) -> Design:
-    """A term of ``columns`` whose hysteresis is refitted jointly with it on every row.
+    """A term of ``columns`` (n x k regressors in the ARX drive, one coefficient each, named by
+    ``labels``) whose hysteresis is refitted jointly with it on every row; ``extra``: settings to
+    report with the fitted model. ``name`` is the cause it stands for.
 
     Not nested in the baseline: the ridge on the cell masses does not act on the columns, so a
     joint fit can move loop shape into hysteresis-shaped columns (``v x``) and end a little worse

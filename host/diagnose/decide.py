@@ -169,21 +169,26 @@ def floor_for(cause: str) -> float:
 
 
 def detection_limit(baseline_rmse: float, noise: float, floor: float) -> float:
-    """The smallest RMS [units of y] an effect's own part (what the baseline cannot absorb) must
-    have to be named on a record whose baseline misses by ``baseline_rmse`` on held-out rows.
+    """The smallest RMS [units of y] of an effect's own part (what the baseline cannot absorb) that
+    a term explaining exactly that part would name on a record whose baseline misses by
+    ``baseline_rmse`` (``B``) on held-out rows; inf when no part of that error could be named.
 
-    An effect adds a part of RMS ``e``, uncorrelated with that error, to it: the baseline then
-    misses by ``sqrt(B^2 + e^2)`` and a term that explains exactly that part is back at ``B``. It
-    passes :func:`against_baseline` at ``floor`` when ``1 - B / sqrt(B^2 + e^2) >= floor``, i.e.
-    ``e >= B sqrt(1 / (1 - floor)^2 - 1)``, and when it lowers the error by :data:`NOISE_SHARE`
-    times the noise, ``e >= sqrt((B + NOISE_SHARE noise)^2 - B^2)``; the larger of the two.
+    The effect, if there is one, is inside ``B``: a part of RMS ``e``, uncorrelated with the rest
+    of the error, leaves ``sqrt(B^2 - e^2)`` once a term explains it. That passes
+    :func:`against_baseline` at ``floor`` when ``1 - sqrt(B^2 - e^2) / B >= floor``, i.e.
+    ``e >= B sqrt(1 - (1 - floor)^2)`` (0.66 B at 25 %, 0.53 B at 15 %), and lowers the error by
+    :data:`NOISE_SHARE` times the noise when ``e >= sqrt(B^2 - (B - NOISE_SHARE noise)^2)``; the
+    larger of the two.
 
     An effect larger than this can still go unseen when the baseline absorbs it (a creep that
     repeats every cycle is loop shape to a Preisach model); ``bench/diagnose_ceiling.py``
     measures how often that happens on the test plants."""
     base = max(float(baseline_rmse), 0.0)
-    by_floor = base * float(np.sqrt(1.0 / (1.0 - floor) ** 2 - 1.0))
-    by_noise = float(np.sqrt((base + NOISE_SHARE * noise) ** 2 - base**2))
+    left = base - NOISE_SHARE * noise
+    if not np.isfinite(base) or left <= 0.0:
+        return float("inf")
+    by_floor = base * float(np.sqrt(1.0 - (1.0 - floor) ** 2))
+    by_noise = float(np.sqrt(base**2 - left**2))
     return max(by_floor, by_noise)
 
 

@@ -51,6 +51,7 @@ from host.diagnose.candidates import (
 from host.diagnose.decide import (
     BLOWUP_RATIO,
     COLUMN_GAIN_FLOOR,
+    CONFOUNDED_R,
     GAIN_FLOOR,
     CandidateScore,
     choose,
@@ -66,7 +67,7 @@ from host.diagnose.hammerstein import FittedModel, fit_hammerstein, rmse
 from host.diagnose.signatures import signatures
 from host.identify.common import MemoryStart, memory_start
 
-__all__ = ["CAUSES", "Diagnosis", "diagnose", "held_out_score", "prepare"]
+__all__ = ["CAUSES", "Diagnosis", "detection_limits", "diagnose", "held_out_score", "limit_sentence", "prepare"]
 
 # first-order actuator (valve + mechanics) lag before the hysteresis, part of the baseline's
 # dynamics (seed 004: a PAM is a first-order lag plus a dead time); up to 250 ms, so that a plant
@@ -501,7 +502,6 @@ def _diagnose(
             )
         else:
             reason += "; the baseline's residual is white: what remains looks like noise"
-    if cause == "none":
         reason += "; " + limit_sentence(limits)
     # the baseline's held-out error on the rows of the named cause (every row when none is named:
     # the rate-dependence term is judged on all held-out rows)
@@ -542,27 +542,38 @@ def _diagnose(
 
 def detection_limits(
     ctx: Context, masks: list[NDArray[np.bool_]], base_folds: list[NDArray[np.float64]], noise: float
-) -> dict[str, float]:
-    """The smallest error of its own [units of y] an effect must leave beside the baseline to be
-    named on this record (:func:`host.diagnose.decide.detection_limit`), for a dynamic term and for
-    a measured column (which has a lower floor), from the baseline's held-out RMSE on every
-    held-out row; with the output's range to read them against."""
+) -> dict[str, float | None]:
+    """The smallest RMS [units of y] of an effect's own part (what the baseline cannot absorb) that
+    could be named on this record (:func:`host.diagnose.decide.detection_limit`), from the
+    baseline's held-out RMSE on every held-out row (``baseline_rmse``): for a dynamic term, and
+    for a measured column (None without a load or temperature column that moves; a column that
+    follows time, ``|r| >= CONFOUNDED_R``, has the dynamic term's floor); with the output's range
+    (peak to peak) to read them against."""
     base = float(np.mean([rmse(b[held], ctx.y[held]) for held, b in zip(masks, base_folds)]))
+    column_floors = [
+        GAIN_FLOOR if abs(float(np.corrcoef(values, ctx.t)[0, 1])) >= CONFOUNDED_R else COLUMN_GAIN_FLOOR
+        for values in (ctx.extras.get(COLUMNS[cause]) for cause in OBSERVED_CAUSES)
+        if values is not None and np.ptp(values) > 0
+    ]
     return {
         "dynamic_term": detection_limit(base, noise, GAIN_FLOOR),
-        "measured_column": detection_limit(base, noise, COLUMN_GAIN_FLOOR),
+        "measured_column": detection_limit(base, noise, min(column_floors)) if column_floors else None,
         "baseline_rmse": base,
         "output_range": float(np.ptp(ctx.y)),
     }
 
 
-def limit_sentence(limits: dict[str, float]) -> str:
-    """What :func:`detection_limits` means for a ``none``, in one clause."""
-    share = limits["dynamic_term"] / (limits["output_range"] or 1.0)
+def limit_sentence(limits: dict[str, float | None]) -> str:
+    """What :func:`detection_limits` means for a ``none`` that no candidate passed, in one clause."""
+    dynamic, column, span = limits["dynamic_term"], limits["measured_column"], limits["output_range"]
+    assert dynamic is not None and span is not None
+    if not np.isfinite(dynamic):
+        return "the baseline's error is at the noise floor: no effect could be told from noise on this record"
+    through_column = f", {column:.3g} through a load or temperature column" if column is not None else ""
     return (
-        f"to be named here, an effect would have to leave an error of its own (one the rate-independent "
-        f"model cannot absorb) of at least {limits['dynamic_term']:.3g} RMS in y's units ({share:.1%} of y's range), "
-        f"{limits['measured_column']:.3g} through a load or temperature column; smaller effects may be present"
+        "to be named here, an effect would have to leave an error of its own (one the rate-independent "
+        f"model cannot absorb) of at least {dynamic:.3g} RMS in y's units ({dynamic / (span or 1.0):.1%} of "
+        f"y's peak-to-peak range){through_column}; smaller effects may be present"
     )
 
 
