@@ -323,8 +323,9 @@ def render(
     off), through the rig (:func:`~tests.plants.blind6_rig.stroke_reading`).
 
     ``base`` is the effect-free core output (computed when not given). The load and temperature
-    forms act through their column's change since the record's start: with the columns held at
-    their first value they are the effect-free plant with the form's element in it."""
+    forms act through their column's change since the record's start (the plant as identified
+    then: the cable's sag and the spring's give at the starting payload are part of it): with the
+    columns held at their first value they are the effect-free plant."""
     peak = params["peak"]
     if form == "pilot_fill_time":
         x = core(drive_of(u, dt_s, form, q, peak), dt_s, params)
@@ -347,12 +348,14 @@ def render(
         x = variable_delay(x, radio_lag_s(x.size, dt_s, q) / dt_s)
     elif form == "elastic_catenary":
         tension = G_MS2 * np.clip(load, 0.0, None) + q["pretension_n"] + k_load * x
-        x = x - cable_give_mm(tension, q) + cable_give_mm(np.asarray([tension[0]]), q)[0]
+        held = G_MS2 * max(float(load[0]), 0.0) + q["pretension_n"] + k_load * x
+        x = x - (cable_give_mm(tension, q) - cable_give_mm(held, q))
     elif form == "overload_spring":
         tension = G_MS2 * np.clip(load, 0.0, None) + k_load * x
         preload = G_MS2 * max(float(load[0]), 0.0) + k_load * q["preload_share"] * span
         knee = q["knee_n"]
-        give = knee * np.logaddexp(0.0, (tension - preload) / knee) - knee * math.log1p(math.exp(-preload / knee))
+        held = G_MS2 * max(float(load[0]), 0.0) + k_load * x
+        give = knee * (np.logaddexp(0.0, (tension - preload) / knee) - np.logaddexp(0.0, (held - preload) / knee))
         x = x - q["compliance_mm_per_n"] * give
     elif form == "sealed_air_spring":
         gas = lowpass(temperature, dt_s, q["gas_tau_s"]) + KELVIN

@@ -29,7 +29,7 @@ Confounds in every record, effect-free ones too (:mod:`tests.plants.blind6_rig`)
 spool valve (6-14 Hz, damping 0.55-0.8), the recorded input read through the transducer's
 snubber (a 4-15 ms lag behind the muscle's pressure), compressor vibration bursts on the frame
 (8-25 um at 23-31 Hz), the multiplexer's crosstalk of the pressure into the stroke channel
-(10-40 um at full pressure), the DAQ's sampling jitter (0.1-0.4 ms RMS) on every channel; stroke
+(10-40 um at full pressure), the DAQ's sampling jitter (20-100 us RMS) on every channel; stroke
 noise 0.01-0.028 mm and a reading step of 0.005-0.025 mm per plant; load (read to 0.002 kg) and
 temperature (read to 0.025 K) columns that always move and act only in their own effect's
 records. The table of every case: ``python -m tests.plants.blind6_family 100``.

@@ -10,7 +10,7 @@ Stroke side (:func:`stroke_reading`): the shop compressor beside the rig shakes 
 it runs (bursts of 23-31 Hz vibration, 8-25 um, running 8-25 s, resting 15-40 s, sampled at the
 record's rate so aliased at the low rates) and the DAQ's multiplexer leaks a little of the
 pressure channel into the stroke channel (crosstalk of 10-40 um at full pressure). In the
-recording (:func:`aperture_jitter`) the DAQ's sampling instants jitter (0.1-0.4 ms RMS) while
+recording (:func:`aperture_jitter`) the DAQ's sampling instants jitter (20-100 us RMS, its USB frames polled) while
 the time stamps stay nominal, so every channel reads an error of its speed times the jitter.
 
 All the confounds are drawn with the plant parameters: the same in a record with its effect on
@@ -83,5 +83,5 @@ def draw_rig(rng: np.random.Generator, peak: float) -> dict[str, float]:
         "vib_mm": rng.uniform(0.008, 0.025),
         "vib_phase": rng.uniform(0.0, 2.0 * math.pi),
         "crosstalk_mm": rng.uniform(0.01, 0.04),
-        "jitter_s": rng.uniform(0.0001, 0.0004),
+        "jitter_s": rng.uniform(0.00002, 0.0001),
     }
