@@ -78,7 +78,6 @@ from tests.plants.visibility import EFFECT_MAX_OVER_SPAN, EFFECT_MIN_OVER_NOISE
 
 DURATION_S = 60.0
 CASES = blind6_cases(DURATION_S)
-OLDER_FAMILIES = (fresh_family, blind_family, blind2_family, blind3_family, blind4_family, blind5_family)
 STILL_TEMP_C = 22.0
 
 
@@ -255,6 +254,7 @@ def test_pilot_dead_time_is_longest_for_slow_changes() -> None:
         lag[lag.size // 8 : lag.size // 4] for lag in (pilot_lag_s(x, dt, q, peak) for x in (slow, fast))
     )
     assert np.all(mid_slow > 1.8 * 0.08) and np.all(mid_fast < 1.5 * 0.08) and np.all(mid_fast >= 0.08)
+    assert np.max(pilot_lag_s(slow, dt, {"pilot_dead_s": 1.0}, peak)) <= 0.3  # s: never slower than a pilot valve
 
 
 @pytest.mark.parametrize("plant", BLIND6_PLANTS)

@@ -64,7 +64,9 @@ INTENSITY_KEY: dict[str, str] = {  # the parameter that scales each form's size
     "ptfe_transition": "transition_gain",
     "sealed_air_spring": "spring_area_mm2",
 }
-PILOT_REF_SPEED = 0.5  # [peak/s] the set-pressure speed at which the pilot's dead time is 2 x its minimum
+PILOT_REF_SPEED = 0.5  # [peak/s] the set-pressure speed at which the pilot's dead time is 1.5 x its minimum
+MAX_FILM_S = 0.4  # [s] the longest lag of the squeeze film
+MAX_PILOT_S = 0.3  # [s] the slowest a pilot-operated valve of this size answers
 
 
 # ---- the load [kg] and temperature [degC] columns ---------------------------------------------
@@ -165,7 +167,7 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
             "band": rng.uniform(0.03, 0.07),
         }
     if form == "pilot_fill_time":  # shortest pilot dead time [s]
-        return {"pilot_dead_s": rng.uniform(0.03, 0.12)}
+        return {"pilot_dead_s": rng.uniform(0.02, 0.08)}
     if form == "packet_radio":  # latency [s]; connection interval [s]; jitter share; seed of the packets
         return {
             "latency_s": rng.uniform(0.02, 0.09),
@@ -203,8 +205,9 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
 
 
 def squeeze_film(x: Array, v: Array, dt_s: float, q: dict[str, float]) -> Array:
-    """``x`` [mm] through a lag of time constant ``tau0 (1 + c v)^3`` (exact per sample)."""
-    tau = q["film_tau_s"] * (1.0 + q["thinning"] * np.clip(v, 0.0, None)) ** 3
+    """``x`` [mm] through a lag of time constant ``tau0 (1 + c v)^3`` (exact per sample), at most
+    :data:`MAX_FILM_S` (the film squeezed to its asperities)."""
+    tau = np.minimum(q["film_tau_s"] * (1.0 + q["thinning"] * np.clip(v, 0.0, None)) ** 3, MAX_FILM_S)
     keep = np.exp(-dt_s / np.maximum(tau, 1e-9)).tolist()
     out = np.empty_like(x)
     y = float(x[0])
@@ -263,9 +266,11 @@ def hold_slip_log(v: Array, dt_s: float, q: dict[str, float]) -> Array:
 
 def pilot_lag_s(u: Array, dt_s: float, q: dict[str, float], peak: float) -> Array:
     """The pilot's dead time [s]: ``pilot_dead_s (1 + 1 / (1 + r / r0))`` for the set pressure's
-    speed ``r`` (smoothed over 50 ms, [peak/s]), ``r0`` = :data:`PILOT_REF_SPEED`."""
+    speed ``r`` (smoothed over 50 ms, [peak/s]), ``r0`` = :data:`PILOT_REF_SPEED`, at most
+    :data:`MAX_PILOT_S`."""
     speed = np.abs(np.gradient(lowpass(u, dt_s, 0.05), dt_s)) / peak
-    return np.asarray(q["pilot_dead_s"] * (1.0 + 1.0 / (1.0 + speed / PILOT_REF_SPEED)), dtype=np.float64)
+    lag = q["pilot_dead_s"] * (1.0 + 1.0 / (1.0 + speed / PILOT_REF_SPEED))
+    return np.asarray(np.minimum(lag, MAX_PILOT_S), dtype=np.float64)
 
 
 def radio_lag_s(n: int, dt_s: float, q: dict[str, float]) -> Array:
