@@ -12,7 +12,8 @@ jointly with its term; a fold then refits only the gains and the term's coeffici
 * ``transport_delay``: a dead time before the hysteresis (at least 3 samples);
 * ``load_dependence`` / ``temperature_drift``: the measured column shifts and bends the curve
   and widens or narrows the loop, and acts through a curved map of itself
-  (``v, v x, v x^2, v branch, v^2``);
+  (``v, v x, v x^2, v branch, v^2``); temperature also through the column after a 10 s thermal
+  lag (``v_lag, v_lag x``: the rubber, braid or regulator body warms after the probe);
 * ``slow_drift``: the same five terms with a ramp in time in place of a measured column: the
   drift no column explains, and the yardstick an observed cause must beat.
 """
@@ -43,6 +44,10 @@ YARDSTICKS = ("slow_drift", "output_lag")
 OBSERVED_CAUSES = ("load_dependence", "temperature_drift")
 CREEP_TAUS_S = (2.0, 5.0, 10.0, 20.0, 40.0, 80.0)  # cross-run diagnosis: one time constant
 CREEP_SPECTRUM_S = (1.0, 4.0, 16.0, 64.0)
+# thermal time constants between the temperature probe and what a temperature changes (rubber,
+# braid, the regulator's body take seconds to a minute): one, in the middle of that range; a 40 s
+# lag as well was never measured (it is only used on records over 160 s, and the scorecards are 100 s)
+THERMAL_LAGS_S = (10.0,)
 MIN_DELAY_SAMPLES = 3
 # dead times screened jointly with the shorter actuator lags (when a signature asks for it)
 JOINT_DELAYS_S = (0.05, 0.1, 0.16, 0.2, 0.3)
@@ -300,10 +305,21 @@ def _column_terms(ctx: Context, name: str, v: NDArray[np.float64], label: str) -
     """``v, v x, v x^2, v branch, v^2`` in the ARX drive: the curve shifts and bends, the loop
     widens or narrows, and the column acts through a curved map of itself (a load sags a muscle
     more per kilogram as it grows; rubber softens faster as it warms): without ``v^2`` a curved
-    offset was left to whatever slow term came next (a creep, a drift)."""
+    offset was left to whatever slow term came next (a creep, a drift).
+
+    A temperature column also acts after each thermal lag of :data:`THERMAL_LAGS_S` shorter than
+    a quarter of the record (``v_lag, v_lag x``: a shift and a gain change that follow the probe
+    late); its shifted copies get the same terms, so they stay its null."""
     xn = _normalised(ctx.x)
     columns = np.column_stack([v, v * xn, v * xn**2, v * ctx.branch, v * v])
-    model = with_columns(ctx, name, columns, [label, f"{label}*x", f"{label}*x^2", f"{label}*branch", f"{label}^2"])
+    labels = [label, f"{label}*x", f"{label}*x^2", f"{label}*branch", f"{label}^2"]
+    if label == "temperature":
+        for tau in THERMAL_LAGS_S:
+            if tau < 0.25 * ctx.y.size * ctx.dt:
+                lagged = _normalised(first_order(v, ctx.dt, tau))
+                columns = np.column_stack([columns, lagged, lagged * xn])
+                labels += [f"{label}_lag{tau:g}s", f"{label}_lag{tau:g}s*x"]
+    model = with_columns(ctx, name, columns, labels)
     model.source = v
     return model
 
