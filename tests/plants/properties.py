@@ -89,3 +89,16 @@ def slow_and_fast_triangles(
         t = np.arange(int(round(2 * period / dt)), dtype=np.float64) * dt
         out.append(peak * (0.1 + 0.8 * (1.0 - np.abs(2.0 * ((t / period) % 1.0) - 1.0))))
     return out
+
+
+def assert_effect_size_as_recorded(effect: str, sim: dict[str, Any], truth: dict[str, Any]) -> None:
+    """The effect's size (RMS of the noise-free output with it minus without) is what the truth
+    records; zero (the same output) on an effect-free record, else in the visibility band
+    ``[EFFECT_MIN_OVER_NOISE x noise, EFFECT_MAX_OVER_SPAN x span]`` after a rescale of 0.25-4."""
+    size = float(np.sqrt(np.mean((sim["on"] - sim["off"]) ** 2)))
+    assert np.isclose(size, truth["effect_size"], rtol=1e-6, atol=1e-12)
+    if effect == "none":
+        assert size == 0.0 and np.array_equal(sim["on"], sim["off"])
+        return
+    assert EFFECT_MIN_OVER_NOISE * truth["noise"] <= size <= EFFECT_MAX_OVER_SPAN * truth["span"]
+    assert 0.25 <= truth["intensity_rescale"] <= 4.0
