@@ -168,6 +168,13 @@ def floor_for(cause: str) -> float:
     return COLUMN_GAIN_FLOOR if cause in OBSERVED_CAUSES else GAIN_FLOOR
 
 
+def column_floor(time_correlation: float) -> float:
+    """The floor of a measured column's cause given its correlation with time over the record:
+    :data:`COLUMN_GAIN_FLOOR`, or :data:`GAIN_FLOOR` when it follows time (``|r| >=``
+    :data:`CONFOUNDED_R`): its shifted copies follow time too, so it has no null of its own."""
+    return GAIN_FLOOR if abs(time_correlation) >= CONFOUNDED_R else COLUMN_GAIN_FLOOR
+
+
 def detection_limit(baseline_rmse: float, noise: float, floor: float) -> float:
     """The smallest RMS [units of y] of an effect's own part (what the baseline cannot absorb) that
     a term explaining exactly that part would name on a record whose baseline misses by
@@ -305,13 +312,14 @@ def choose(
         best = "slow_drift"
         # a column that follows time has shifted copies that follow time too: its surrogates
         # cannot tell it from a drift, which is the point of naming the confound; without that
-        # null it needs the floor of a term without one (GAIN_FLOOR, not COLUMN_GAIN_FLOOR)
+        # null it needs the floor of a term without one (column_floor)
+        correlation = {c: (time_correlation or {}).get(COLUMNS[c], 0.0) for c in OBSERVED_CAUSES}
         confounded = [
             c
             for c in OBSERVED_CAUSES
             if c in scores
-            and abs((time_correlation or {}).get(COLUMNS[c], 0.0)) >= CONFOUNDED_R
-            and against_baseline(scores[c], noise, surrogates=False, floor=GAIN_FLOOR) is None
+            and abs(correlation[c]) >= CONFOUNDED_R
+            and against_baseline(scores[c], noise, surrogates=False, floor=column_floor(correlation[c])) is None
         ]
         if confounded:
             best = max(confounded, key=lambda c: scores[c].mean)

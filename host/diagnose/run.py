@@ -50,11 +50,10 @@ from host.diagnose.candidates import (
 )
 from host.diagnose.decide import (
     BLOWUP_RATIO,
-    COLUMN_GAIN_FLOOR,
-    CONFOUNDED_R,
     GAIN_FLOOR,
     CandidateScore,
     choose,
+    column_floor,
     detection_limit,
     distinct,
     drift_would_be_named,
@@ -486,7 +485,7 @@ def _diagnose(
     }
     verdict = distinct(with_signatures(choose(scores, noise, time_correlation), scores, found, noise), scores)
     cause = verdict.cause
-    limits = detection_limits(ctx, masks, base_folds, noise)
+    limits = detection_limits(ctx, masks, base_folds, noise, time_correlation)
     chosen = designs.get(cause) if cause != "none" else None
     extended_full = chosen.fit(ctx, np.ones(n, dtype=bool)) if chosen is not None else None
     evidence = baseline_evidence(baseline_full.prediction - ctx.y, ctx.u, ctx.rate, ctx.extras, ctx.dt)
@@ -541,23 +540,23 @@ def _diagnose(
 
 
 def detection_limits(
-    ctx: Context, masks: list[NDArray[np.bool_]], base_folds: list[NDArray[np.float64]], noise: float
+    ctx: Context,
+    masks: list[NDArray[np.bool_]],
+    base_folds: list[NDArray[np.float64]],
+    noise: float,
+    time_correlation: dict[str, float],
 ) -> dict[str, float | None]:
     """The smallest RMS [units of y] of an effect's own part (what the baseline cannot absorb) that
     could be named on this record (:func:`host.diagnose.decide.detection_limit`), from the
     baseline's held-out RMSE on every held-out row (``baseline_rmse``): for a dynamic term, and
-    for a measured column (None without a load or temperature column that moves; a column that
-    follows time, ``|r| >= CONFOUNDED_R``, has the dynamic term's floor); with the output's range
-    (peak to peak) to read them against."""
+    for a measured column at its floor (:func:`host.diagnose.decide.column_floor` of its
+    ``time_correlation``; None without a load or temperature column that moves); with the
+    output's range (peak to peak) to read them against."""
     base = float(np.mean([rmse(b[held], ctx.y[held]) for held, b in zip(masks, base_folds)]))
-    column_floors = [
-        GAIN_FLOOR if abs(float(np.corrcoef(values, ctx.t)[0, 1])) >= CONFOUNDED_R else COLUMN_GAIN_FLOOR
-        for values in (ctx.extras.get(COLUMNS[cause]) for cause in OBSERVED_CAUSES)
-        if values is not None and np.ptp(values) > 0
-    ]
+    floors = [column_floor(r) for name, r in time_correlation.items() if name in COLUMNS.values()]
     return {
         "dynamic_term": detection_limit(base, noise, GAIN_FLOOR),
-        "measured_column": detection_limit(base, noise, min(column_floors)) if column_floors else None,
+        "measured_column": detection_limit(base, noise, min(floors)) if floors else None,
         "baseline_rmse": base,
         "output_range": float(np.ptp(ctx.y)),
     }
