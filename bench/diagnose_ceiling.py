@@ -20,8 +20,8 @@ the oracle's median held-out gain next to the diagnosis' own candidate's. The ef
 are not scored here (``bench/diagnose_scorecard.py`` counts their false alarms). A record longer
 than the diagnosis works on is decimated, its waveform with it, exactly as the diagnosis does.
 
-CPU per record: one diagnosis, then the baseline again (lag choice, fit, four fold fits) and the
-oracle's joint fit and four fold fits, ~6 s at 100 s; ``--workers 2`` splits records over two
+CPU per record: one diagnosis, then on its context and baseline the baseline's four fold fits
+and the oracle's joint fit and four fold fits, ~6 s at 100 s; ``--workers 2`` splits records over two
 processes. The tuning family is not here: its records are not built from a noise-free pair with
 and without the effect.
 """
@@ -47,17 +47,7 @@ from edge.errors import DataError  # noqa: E402
 from host.diagnose.candidates import baseline, with_columns  # noqa: E402
 from host.diagnose.decide import against_baseline, floor_for  # noqa: E402
 from host.diagnose.folds import BLOCKS_PER_FOLD, holdout_masks, noise_floor  # noqa: E402
-from host.diagnose.run import (  # noqa: E402
-    PREISACH_LEVELS,
-    choose_actuator_lag,
-    decimated,
-    diagnose,
-    finite_or_null,
-    fit_baseline,
-    held_out_score,
-    prepare,
-    samples_needed,
-)
+from host.diagnose.run import diagnose, finite_or_null, held_out_score  # noqa: E402
 from tests.plants.family import Case  # noqa: E402
 
 FOLDS = 4
@@ -86,18 +76,18 @@ def oracle(set_name: str, case: Case) -> dict[str, Any]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            d = diagnose(m, progress=False)
+            d = diagnose(m, progress=False, folds=FOLDS)
         except DataError as refusal:
             refused = {"verdict": "refused", "why_not": str(refusal), "candidate": 0.0, "oracle": 0.0}
             return {**row, **refused, "passes": False, "cpu_s": time.process_time() - start}
-        worked, _note = decimated(m)  # what the diagnosis works on; the waveform the same way
-        step = len(m) // len(worked)
+        # the diagnosis' own record (decimated as it was), baseline and folds; the waveform is
+        # decimated the same way (block means of the same length)
+        ctx, start_index = d.context, d.start_index
+        step = len(m) // (start_index + ctx.y.size)
         if step > 1:
-            waveform = waveform[: len(worked) * step].reshape(-1, step).mean(axis=1)
-        ctx, start_index, _notes = prepare(worked, PREISACH_LEVELS, True, samples_needed(FOLDS))
+            waveform = waveform[: (start_index + ctx.y.size) * step].reshape(-1, step).mean(axis=1)
         masks = holdout_masks(ctx.y.size, FOLDS, BLOCKS_PER_FOLD)
-        ctx.lag_s = choose_actuator_lag(ctx)
-        base = baseline(ctx, fit_baseline(ctx))
+        base = baseline(ctx, d.baseline_full)
         base_folds = [base.fit(ctx, ~held).prediction for held in masks]
         term = with_columns(ctx, "oracle", waveform[start_index:, None], ["effect"])
         score = held_out_score(ctx, "oracle", term, masks, base_folds)
