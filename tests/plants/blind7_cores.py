@@ -255,7 +255,9 @@ def draw_params(core: str, rng: np.random.Generator, peak: float) -> dict[str, f
         k = (top - weight) / stroke
         coupling = rng.uniform(0.5, 0.9)
         g.update(sarosi_a=a, x0_mm=x0, area_mm2=area, weight_n=weight, k_spring_n_mm=k, k_total_n_mm=2.0 * k)
-        g.update(coupling=coupling, field_gain=2.0 * (2.0 * coupling + FIELD_MARGIN), locked_weight=rng.uniform(0.15, 0.3))
+        g.update(
+            coupling=coupling, field_gain=2.0 * (2.0 * coupling + FIELD_MARGIN), locked_weight=rng.uniform(0.15, 0.3)
+        )
         g.update(ising_seed=float(rng.integers(0, 2**31)))
         return g
     if core == "detent_carriage":

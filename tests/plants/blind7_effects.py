@@ -155,32 +155,63 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
     if form == "eddy_current_brake":  # the brake's hold [mm of stroke lag]; critical speed [mm/s]
         return {"brake_hold_mm": rng.uniform(0.2, 0.8), "critical_mm_s": rng.uniform(15.0, 60.0)}
     if form == "shear_thickening_fill":  # lag below the critical speed [s]; critical speed [mm/s]; exponent
-        return {"fill_tau_s": rng.uniform(0.004, 0.015), "thickening_mm_s": rng.uniform(4.0, 12.0),
-                "thickening_power": rng.uniform(1.5, 3.0)}
+        return {
+            "fill_tau_s": rng.uniform(0.004, 0.015),
+            "thickening_mm_s": rng.uniform(4.0, 12.0),
+            "thickening_power": rng.uniform(1.5, 3.0),
+        }
     if form == "andrade_hereditary":  # share of span per unit stress after 20 s; stress exponent
         return {"andrade_share": rng.uniform(0.02, 0.06), "stress_power": rng.uniform(1.0, 2.0)}
     if form == "fitting_pullout":  # share of span after 20 s at peak; threshold [peak]; power; barb bite
-        return {"pullout_share": rng.uniform(0.02, 0.06), "pullout_threshold": rng.uniform(0.3, 0.55),
-                "pullout_power": rng.uniform(1.0, 2.5), "barb_bite": rng.uniform(0.5, 2.0)}
+        return {
+            "pullout_share": rng.uniform(0.02, 0.06),
+            "pullout_threshold": rng.uniform(0.3, 0.55),
+            "pullout_power": rng.uniform(1.0, 2.5),
+            "barb_bite": rng.uniform(0.5, 2.0),
+        }
     if form == "ultrasonic_ranging":  # processing latency [s]; ping rate [Hz]; distance to the carriage [mm]
-        return {"processing_s": rng.uniform(0.01, 0.04), "ping_hz": rng.uniform(25.0, 60.0),
-                "range_mm": rng.uniform(200.0, 600.0), "ping_phase": rng.uniform(0.0, 1.0)}
+        return {
+            "processing_s": rng.uniform(0.01, 0.04),
+            "ping_hz": rng.uniform(25.0, 60.0),
+            "range_mm": rng.uniform(200.0, 600.0),
+            "ping_phase": rng.uniform(0.0, 1.0),
+        }
     if form == "ptp_sync_wander":  # mean delay [s]; wander [share of it]; servo time [s]; seed
-        return {"mean_delay_s": rng.uniform(0.015, 0.06), "wander_share": rng.uniform(0.2, 0.4),
-                "servo_s": rng.uniform(5.0, 20.0), "ptp_seed": float(rng.integers(0, 2**31))}
+        return {
+            "mean_delay_s": rng.uniform(0.015, 0.06),
+            "wander_share": rng.uniform(0.2, 0.4),
+            "servo_s": rng.uniform(5.0, 20.0),
+            "ptp_seed": float(rng.integers(0, 2**31)),
+        }
     if form == "foam_pad_sink":  # scale; elastic compliance [mm/kg]; plateau compliance [mm/kg]; knee; lag [s]
-        return {"pad_scale": 1.0, "elastic_mm_per_kg": rng.uniform(0.02, 0.06),
-                "plateau_mm_per_kg": rng.uniform(0.15, 0.4), "knee_offset_kg": rng.uniform(-0.3, 0.8),
-                "knee_width_kg": rng.uniform(0.15, 0.4), "foam_tau_s": rng.uniform(0.5, 3.0)}
+        return {
+            "pad_scale": 1.0,
+            "elastic_mm_per_kg": rng.uniform(0.02, 0.06),
+            "plateau_mm_per_kg": rng.uniform(0.15, 0.4),
+            "knee_offset_kg": rng.uniform(-0.3, 0.8),
+            "knee_width_kg": rng.uniform(0.15, 0.4),
+            "foam_tau_s": rng.uniform(0.5, 3.0),
+        }
     if form == "joint_slip_tilt":  # tilt reading [mm/kg at the arm's root]; slip band [kg]; arm [mm]
-        return {"tilt_mm_per_kg": rng.uniform(0.1, 0.4), "slip_kg": rng.uniform(0.05, 0.2),
-                "arm_mm": rng.uniform(40.0, 120.0)}
+        return {
+            "tilt_mm_per_kg": rng.uniform(0.1, 0.4),
+            "slip_kg": rng.uniform(0.05, 0.2),
+            "arm_mm": rng.uniform(40.0, 120.0),
+        }
     if form == "bumper_softening":  # softening [1/K]; contact [share of stroke]; stiffness ratio; lag [s]
-        return {"softening_per_k": rng.uniform(0.02, 0.06), "contact_share": rng.uniform(0.5, 0.75),
-                "bumper_ratio": rng.uniform(0.5, 2.0), "bumper_tau_s": rng.uniform(15.0, 40.0)}
+        return {
+            "softening_per_k": rng.uniform(0.02, 0.06),
+            "contact_share": rng.uniform(0.5, 0.75),
+            "bumper_ratio": rng.uniform(0.5, 2.0),
+            "bumper_tau_s": rng.uniform(15.0, 40.0),
+        }
     if form == "coil_gradient_bridge":  # reading per K of difference [mm/K]; lags [s]; gain slope
-        return {"bridge_mm_per_k": rng.uniform(0.05, 0.2), "near_tau_s": rng.uniform(3.0, 10.0),
-                "far_tau_s": rng.uniform(25.0, 80.0), "gain_slope": rng.uniform(0.5, 1.5)}
+        return {
+            "bridge_mm_per_k": rng.uniform(0.05, 0.2),
+            "near_tau_s": rng.uniform(3.0, 10.0),
+            "far_tau_s": rng.uniform(25.0, 80.0),
+            "gain_slope": rng.uniform(0.5, 1.5),
+        }
     if effect == "none":
         return {}
     raise KeyError(f"unknown form {effect}:{form}; known: {BLIND7_FORMS}")
@@ -188,15 +219,18 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
 
 def _lag_through(x: Array, dt_s: float, speed_for: tuple[list[float], list[float]]) -> Array:
     """``x`` [mm] followed by a carriage that moves at the speed ``v(|x - y|)`` (tabulated as
-    ``(lags, speeds)``, increasing), stepped exactly as a lag of time constant ``|x - y| / v``."""
+    ``(lags, speeds)``, increasing), stepped exactly as a lag of time constant ``|x - y| / v``;
+    a lag past the table's last is held at it (the carriage dragged along)."""
     lags, speeds = speed_for
     top = lags[-1]
     out = np.empty_like(x)
     y = float(x[0])
     for i, xi in enumerate(x.tolist()):
         gap = xi - y
-        size = min(abs(gap), top)
-        if size > 0.0:
+        size = abs(gap)
+        if size >= top:  # past the largest tabulated lag: carried along at it
+            y = xi - math.copysign(top, gap)
+        elif size > 0.0:
             j = min(bisect.bisect_left(lags, size), len(lags) - 1)
             lo = max(j - 1, 0)
             span = lags[j] - lags[lo]

@@ -148,9 +148,7 @@ BLIND7_PROTOCOLS: dict[str, Protocol] = {
 }
 
 
-def with_preconditioning(
-    protocol: str, duration_s: float, dt_s: float, peak: float, rng: np.random.Generator
-) -> Array:
+def with_preconditioning(protocol: str, duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """0.5-1 s vented, three haversine cycles to 0.97-1 ``peak`` of 1.0-1.6 s each, 0.3 s
     vented, a 0.5 s raised-cosine blend to the protocol's first value, then ``protocol``
     [0..peak] to ``duration_s``."""

@@ -1,0 +1,425 @@
+"""Properties of the ninth (blind7) held-out plant family; the diagnosis is never run here.
+
+Short records (60 s) keep the default run to a few CPU seconds. Checked: coverage (new cores,
+forms, protocols, rates, column patterns, seeds, noise seed offset; every protocol-rate pair;
+each form meets several protocols and rates), determinism by seed, finite quantised records
+with monotone time, every effect visible (>= 5x noise) yet modest (<= 12 % of span) and sizes
+spread over the band, columns that move in every record and do nothing unless they are the
+effect (and do something when they are), the rig's confounds in effect-free records, the memory
+known early, delays that lag (the ranging sensor in held steps, the PTP delay wandering), creep
+that keeps moving in a hold (Andrade's recovering after a step down, the pull-out never coming
+back), rate forms that grow with speed (the fill not at all when slow, the brake capped at its
+hold), the foam's plateau and lag, the joint's slip band, the bumper acting only at the top, the
+bridge's temperature response fading when the temperature settles, and each core's loop
+(closed, 3-20 % wide, descending above ascending).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from functools import cache, partial
+from typing import Any
+
+import numpy as np
+import pytest
+
+from tests.plants import (
+    blind2_effects,
+    blind2_family,
+    blind2_protocols,
+    blind3_effects,
+    blind3_family,
+    blind3_protocols,
+    blind4_effects,
+    blind4_family,
+    blind4_protocols,
+    blind5_effects,
+    blind5_family,
+    blind5_protocols,
+    blind6_effects,
+    blind6_family,
+    blind6_protocols,
+    blind_effects,
+    blind_family,
+    blind_protocols,
+    effects,
+    family,
+    fresh_effects,
+    fresh_family,
+    fresh_protocols,
+    protocols,
+)
+from tests.plants.blind7_cores import BLIND7_CORES, draw_params, ising_locked_share
+from tests.plants.blind7_effects import (
+    BLIND7_FORMS,
+    LOAD_PATTERNS,
+    TEMPERATURE_PATTERNS,
+    draw_effect_params,
+    eddy_current_brake,
+    foam_sink_mm,
+    joint_slip,
+    ptp_delay_s,
+    render,
+    ultrasonic_lag,
+)
+from tests.plants.blind7_family import (
+    BLIND7_PLANTS,
+    BLIND7_RATES_HZ,
+    NONE_PER_PLANT,
+    QUANT_MM,
+    SEED_BASE,
+    SEED_OFFSET,
+    blind7_cases,
+    blind7_measurement,
+    measurement_from,
+    simulate,
+)
+from tests.plants.blind7_protocols import BLIND7_PROTOCOLS, with_preconditioning
+from tests.plants.blind7_rig import muscle_pressure, popcorn_noise, valve_pressure
+from tests.plants.filters import lowpass
+from tests.plants.properties import (
+    assert_any_duration_builds,
+    assert_closed_loop_3_to_20_percent_wide,
+    assert_deterministic_by_seed,
+    assert_effect_size_as_recorded,
+    slow_and_fast_triangles,
+    step_and_hold,
+)
+from tests.plants.visibility import EFFECT_MIN_OVER_NOISE
+
+DURATION_S = 60.0
+CASES = blind7_cases(DURATION_S)
+STILL_TEMP_C = 22.0
+
+
+@cache
+def _simulated(case: family.Case) -> dict[str, Any]:
+    return simulate(case)
+
+
+def _rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(x * x)))
+
+
+def _triangles(peak: float, dt: float, period: float, cycles: int) -> np.ndarray:
+    t = np.arange(int(round(cycles * period / dt))) * dt
+    return np.asarray(peak * (0.1 + 0.8 * (1.0 - np.abs(2.0 * ((t / period) % 1.0) - 1.0))))
+
+
+def _render(
+    plant: str, params: dict[str, float], u: np.ndarray, dt: float, form: str, q: dict[str, float]
+) -> np.ndarray:
+    """``form`` on ``plant`` for the set pressure ``u`` with still columns."""
+    base = BLIND7_CORES[plant](u, dt, params)
+    return render(params, u, dt, form, q, np.zeros_like(u), np.full_like(u, STILL_TEMP_C), base)
+
+
+def _older_seeds() -> set[int]:
+    seeds = {c.seed for c in family.tuning_cases(1.0)}
+    seeds |= {c.seed for c in fresh_family.fresh_cases(1.0) + blind_family.blind_cases(1.0)}
+    seeds |= {c.seed for c in blind2_family.blind2_cases(1.0) + blind3_family.blind3_cases(1.0)}
+    seeds |= {c.seed for c in blind4_family.blind4_cases(1.0) + blind5_family.blind5_cases(1.0)}
+    return seeds | {c.seed for c in blind6_family.blind6_cases(1.0)}
+
+
+def test_cases_cover_new_cores_forms_protocols_rates_and_columns() -> None:
+    older_plants = {*family.TUNING_PLANTS, *family.SECOND_TUNING_PLANTS, *fresh_family.FRESH_PLANTS}
+    older_plants |= {*blind_family.BLIND_PLANTS, *blind2_family.BLIND2_PLANTS, *blind3_family.BLIND3_PLANTS}
+    older_plants |= {*blind4_family.BLIND4_PLANTS, *blind5_family.BLIND5_PLANTS, *blind6_family.BLIND6_PLANTS}
+    assert len(BLIND7_PLANTS) == 4 and not set(BLIND7_PLANTS) & older_plants
+    tables = (
+        effects.FORMS,
+        fresh_effects.FRESH_FORMS,
+        blind_effects.BLIND_FORMS,
+        blind2_effects.BLIND2_FORMS,
+        blind3_effects.BLIND3_FORMS,
+        blind4_effects.BLIND4_FORMS,
+        blind5_effects.BLIND5_FORMS,
+        blind6_effects.BLIND6_FORMS,
+    )
+    older_forms = {f for table in tables for e, forms in table.items() if e != "none" for f in forms}
+    assert BLIND7_FORMS.keys() == effects.FORMS.keys()
+    assert all(len(forms) == 2 and not set(forms) & older_forms for e, forms in BLIND7_FORMS.items() if e != "none")
+    per = Counter((c.plant, c.effect, c.form) for c in CASES)
+    for plant in BLIND7_PLANTS:
+        for effect, forms in BLIND7_FORMS.items():
+            for form in forms:
+                assert per[(plant, effect, form)] == (NONE_PER_PLANT if effect == "none" else 1)
+    assert len(CASES) == 60 and len({c.seed for c in CASES}) == 60 and min(c.seed for c in CASES) == SEED_BASE
+    assert Counter(c.effect == "none" for c in CASES) == {False: 40, True: 20}
+    assert not {c.seed for c in CASES} & _older_seeds()
+    older_offsets = {blind2_family.SENSORS.seed_offset, blind3_family.SENSORS.seed_offset}
+    older_offsets |= {blind4_family.SENSORS.seed_offset, blind5_family.SEED_OFFSET, blind6_family.SEED_OFFSET}
+    assert SEED_OFFSET not in older_offsets | {10_000, 50_000}
+    older_protocols = {*protocols.PROTOCOLS, *fresh_protocols.FRESH_PROTOCOLS, *blind_protocols.BLIND_PROTOCOLS}
+    older_protocols |= {*blind2_protocols.BLIND2_PROTOCOLS, *blind3_protocols.BLIND3_PROTOCOLS}
+    older_protocols |= {*blind4_protocols.BLIND4_PROTOCOLS, *blind5_protocols.BLIND5_PROTOCOLS}
+    older_protocols |= set(blind6_protocols.BLIND6_PROTOCOLS)
+    assert {c.protocol for c in CASES} == set(BLIND7_PROTOCOLS) and len(BLIND7_PROTOCOLS) == 5
+    assert not set(BLIND7_PROTOCOLS) & older_protocols
+    older_rates = {*family.RATES_HZ, *fresh_family.FRESH_RATES_HZ, *blind_family.BLIND_RATES_HZ}
+    older_rates |= {*blind2_family.BLIND2_RATES_HZ, *blind3_family.BLIND3_RATES_HZ, *blind4_family.BLIND4_RATES_HZ}
+    older_rates |= {*blind5_family.BLIND5_RATES_HZ, *blind6_family.BLIND6_RATES_HZ}
+    rates = {c.rate_hz for c in CASES}
+    assert rates == set(BLIND7_RATES_HZ) and all(40.0 <= r <= 600.0 for r in rates) and not rates & older_rates
+    assert len({(c.protocol, c.rate_hz) for c in CASES}) == len(BLIND7_PROTOCOLS) * len(rates)
+    for forms in BLIND7_FORMS.values():  # a form is not tied to one protocol or rate
+        for form in forms:
+            mine = [c for c in CASES if c.form == form]
+            assert len({c.protocol for c in mine}) >= 4 and len({c.rate_hz for c in mine}) >= 3, form
+    older_columns: set[str] = set()
+    for module in (fresh_effects, blind_effects, blind2_effects, blind3_effects, blind4_effects, blind5_effects):
+        older_columns |= {*module.LOAD_PATTERNS, *module.TEMPERATURE_PATTERNS}
+    older_columns |= {*blind6_effects.LOAD_PATTERNS, *blind6_effects.TEMPERATURE_PATTERNS}
+    assert not {*LOAD_PATTERNS, *TEMPERATURE_PATTERNS} & older_columns
+    assert {c.plant for c in CASES if c.effect == "none"} == set(BLIND7_PLANTS)
+
+
+@pytest.mark.parametrize("case", CASES, ids=lambda c: c.name)
+def test_case_is_finite_quantised_visible_modest_with_moving_columns(case: family.Case) -> None:
+    sim = _simulated(case)
+    m, truth = measurement_from(case, sim)
+    n = int(round(DURATION_S * case.rate_hz))
+    assert len(m) == m.u.size == m.y.size == n and np.all(np.isfinite(m.y)) and np.all(np.isfinite(m.u))
+    assert np.all(np.diff(m.t) > 0.0) and np.allclose(np.diff(m.t), 1.0 / case.rate_hz) and m.source == case.name
+    assert (truth["effect"], truth["form"]) == (case.effect, case.form)
+    assert set(m.extras) == {"load", "temperature"}
+    assert all(np.all(np.isfinite(column)) for column in m.extras.values())
+    assert np.ptp(m.extras["load"]) >= 0.3 and np.ptp(m.extras["temperature"]) >= 0.5  # kg, K: they move
+    assert np.allclose(m.y / QUANT_MM[case.plant], np.round(m.y / QUANT_MM[case.plant]), atol=1e-6)
+    step = truth["plant_parameters"]["input_step_bar"]
+    assert np.allclose(m.u / step, np.round(m.u / step), atol=1e-6) and np.min(m.u) >= -0.05
+    assert 8.0 <= truth["span"] <= 60.0 and np.ptp(m.y) > 0.5 * truth["span"]
+    residual = m.y - sim["on"]  # noise and reading step
+    assert np.std(residual) == pytest.approx(truth["noise"], rel=0.2)
+    assert_effect_size_as_recorded(case.effect, sim, truth)
+    if case.effect != "none":
+        assert 1.0 / 3.0 - 1e-9 <= truth["parameters"]["calibration"] <= 3.0 + 1e-9
+
+
+def test_effect_sizes_spread_over_the_band() -> None:
+    """Not all at the bottom: the sizes over span reach from ~1 % to several %."""
+    shares = np.array([_simulated(c)["truth"]["effect_size_over_span"] for c in CASES if c.effect != "none"])
+    assert np.min(shares) < 0.015 and np.max(shares) > 0.06 and 0.015 <= np.median(shares) <= 0.06
+
+
+@pytest.mark.parametrize(
+    "case", [c for c in CASES if c.effect in ("none", "load_dependence", "temperature_drift")], ids=lambda c: c.name
+)
+def test_columns_act_only_in_their_own_effects_records(case: family.Case) -> None:
+    sim = _simulated(case)
+    truth = sim["truth"]
+    params, q = truth["plant_parameters"], truth["parameters"]
+    dt = 1.0 / case.rate_hz
+    u = sim["command"]
+    assert np.allclose(valve_pressure(u, dt, params), sim["u"])  # the command the recorded input came from
+    still_load = np.full_like(sim["load"], float(sim["load"][0]))
+    still_temp = np.full_like(sim["temperature"], float(sim["temperature"][0]))
+    for load, temp, which in ((still_load, sim["temperature"], "load"), (sim["load"], still_temp, "temperature")):
+        again = render(params, u, dt, case.form, dict(q), load, temp, sim["base"])
+        change = _rms(again - sim["on"])
+        if case.effect in (f"{which}_dependence", f"{which}_drift"):  # held, it is the effect-free record
+            assert change == pytest.approx(truth["effect_size"]) and change >= EFFECT_MIN_OVER_NOISE * truth["noise"]
+        else:
+            assert change == 0.0, (which, change)
+
+
+@pytest.mark.parametrize("plant", BLIND7_PLANTS)
+def test_effect_free_records_carry_the_rig_confounds(plant: str) -> None:
+    """The PWM ripple in the recorded input, the hose between the transducer and the muscle,
+    the channel skew and popcorn noise are in every record; none is an effect of its own size."""
+    case = next(c for c in CASES if c.plant == plant and c.effect == "none")
+    sim = _simulated(case)
+    m, truth = measurement_from(case, sim)
+    params, dt = truth["plant_parameters"], 1.0 / case.rate_hz
+    u = sim["command"]
+    ripple = sim["u"] - valve_pressure(u, dt, {**params, "ripple_bar": 0.0})
+    assert 0.002 < float(np.max(np.abs(ripple))) / params["peak"] <= 0.0101  # aliased PWM ripple, in the input only
+    inside = muscle_pressure(u, dt, params)  # the recorded input leads it by the hose's lag
+    hosed = lowpass(valve_pressure(u, dt, {**params, "ripple_bar": 0.0}), dt, params["hose_tau_s"])
+    assert _rms(inside - sim["u"]) / params["peak"] > 0.002 and _rms(inside - hosed) < 0.5 * _rms(inside - sim["u"])
+    popcorn = popcorn_noise(u.size, dt, params)
+    assert set(np.unique(popcorn)) <= {0.0, params["rtn_mm"]} and 0.004 < params["rtn_mm"] < 0.016
+    skew_error = sim["off"] - sim["base"] - popcorn  # the stroke converted skew_s late: its speed times that
+    speed = np.abs(np.diff(sim["base"], append=sim["base"][-1])) / dt
+    assert np.all(np.abs(skew_error) <= speed * params["skew_s"] + 1e-9) and np.any(skew_error != 0.0)
+    assert 0.0005 < _rms(popcorn) < 2.0 * truth["noise"]  # popcorn: a few noise units at most
+    assert np.std(m.u - sim["u"]) < 0.01  # bar: the transducer's noise and step
+
+
+@pytest.mark.parametrize("case", CASES[::3], ids=lambda c: c.name)
+def test_memory_is_known_early(case: family.Case) -> None:
+    sim = _simulated(case)
+    early = int(0.15 * sim["u"].size)
+    u, off = sim["command"], sim["off"]
+    assert u[0] == 0.0 and sim["u"][0] == 0.0 and abs(off[0]) < 0.3
+    assert np.max(u[:early]) >= 0.96 * np.max(u) and np.min(u[int(1.5 * case.rate_hz) : early]) <= 0.02 * np.max(u)
+    assert np.ptp(off[:early]) >= 0.85 * np.ptp(off)
+
+
+def test_delay_forms_lag_the_effect_free_output() -> None:
+    for case in (c for c in CASES if c.effect == "transport_delay"):
+        sim = _simulated(case)
+        on, off = sim["on"], sim["off"]
+        lags = np.arange(0, int(0.4 * case.rate_hz))
+        misfit = [float(np.mean((on[k:] - off[: off.size - k]) ** 2)) for k in lags]
+        assert lags[int(np.argmin(misfit))] > 0, case.name
+
+
+def test_ranging_sensor_holds_each_ping_and_the_ptp_delay_wanders() -> None:
+    dt = 0.002
+    t = np.arange(int(10.0 / dt)) * dt
+    x = np.asarray(10.0 * t, dtype=np.float64)  # mm: a steady 10 mm/s
+    q = {"processing_s": 0.03, "ping_hz": 40.0, "range_mm": 300.0, "ping_phase": 0.0}
+    read = ultrasonic_lag(x, dt, q, 20.0)
+    assert np.all(np.diff(read) >= 0.0) and np.count_nonzero(np.diff(read)) <= 10.0 * 40.0 + 1  # held between pings
+    late = (x - read)[t > 1.0] / 10.0  # s behind
+    assert 0.03 < float(late.min()) and float(late.max()) < 0.03 + 1.0 / 40.0 + 0.005  # latency plus up to a ping
+    d = ptp_delay_s(t.size, dt, {"mean_delay_s": 0.04, "wander_share": 0.3, "servo_s": 2.0, "ptp_seed": 3.0})
+    assert 0.012 <= d.min() and d.max() <= 0.08 and np.std(d) > 0.004 and abs(np.mean(d) - 0.04) < 0.012
+
+
+@pytest.mark.parametrize("plant", BLIND7_PLANTS)
+def test_creep_forms_keep_moving_in_a_hold_and_the_core_alone_settles(plant: str) -> None:
+    rng = np.random.default_rng(5)
+    dt, peak = 0.01, 4.0
+    params = draw_params(plant, rng, peak)
+    u = step_and_hold(peak, dt)
+    base = BLIND7_CORES[plant](u, dt, params)
+    span = float(np.ptp(base))
+    i10, i28, i40, i58 = (int(s / dt) for s in (10.0, 28.0, 40.0, 58.0))
+    assert abs(base[i28] - base[i10]) < 0.01 * span and abs(base[i58] - base[i40]) < 0.01 * span  # it settles
+    off = _render(plant, params, u, dt, "none", {})
+    for form in BLIND7_FORMS["creep"]:
+        q = draw_effect_params("creep", form, rng)
+        change = _render(plant, params, u, dt, form, q) - off
+        assert abs(change[i28] - change[i10]) > 0.003 * span, form  # still moving 8-26 s after the step up
+        if form == "andrade_hereditary":  # recovers after the step down (Boltzmann superposition)
+            assert change[i28] > change[i10] > 0.0 and change[i58] < change[i40] < change[i28]
+        else:  # the bladder never slides back into its fitting
+            assert np.all(np.diff(change) <= 1e-12) and change[i58] == pytest.approx(change[i40], abs=1e-9)
+
+
+@pytest.mark.parametrize("plant", BLIND7_PLANTS)
+def test_rate_forms_grow_with_the_input_speed(plant: str) -> None:
+    rng = np.random.default_rng(6)
+    dt, peak = 0.005, 4.0
+    params = draw_params(plant, rng, peak)
+    for form in BLIND7_FORMS["rate_dependence"]:
+        q = draw_effect_params("rate_dependence", form, rng)
+        sizes = []
+        for u in slow_and_fast_triangles(peak, dt):
+            sizes.append(_rms(_render(plant, params, u, dt, form, q) - _render(plant, params, u, dt, "none", q)))
+        assert sizes[1] > 2.0 * sizes[0], (form, sizes)
+        if form == "shear_thickening_fill":  # below its critical speed the fill hardly lags at all
+            assert sizes[1] > 5.0 * sizes[0], sizes
+
+
+def test_eddy_brake_lag_is_capped_at_its_hold() -> None:
+    dt = 0.001
+    t = np.arange(int(4.0 / dt)) * dt
+    q = {"brake_hold_mm": 0.4, "critical_mm_s": 30.0}
+    for speed in (5.0, 30.0, 300.0):  # mm/s: below, at and far past the critical speed
+        x = np.asarray(speed * t, dtype=np.float64)
+        lag = float((x - eddy_current_brake(x, dt, q))[-1])
+        assert 0.0 < lag <= 0.4 + 1e-9
+        if speed == 5.0:  # on the rising side: 2 h r / (1 + r^2)
+            assert lag == pytest.approx(2 * 0.4 * (5 / 30) / (1 + (5 / 30) ** 2), rel=0.05)
+        if speed == 300.0:
+            assert lag > 0.39
+
+
+def test_foam_pads_sink_more_per_kg_in_their_plateau_and_after_a_lag() -> None:
+    dt = 0.01
+    q = {
+        "pad_scale": 1.0,
+        "elastic_mm_per_kg": 0.04,
+        "plateau_mm_per_kg": 0.4,
+        "knee_offset_kg": 1.2,
+        "knee_width_kg": 0.15,
+        "foam_tau_s": 1.5,
+    }
+    t = np.arange(int(40.0 / dt)) * dt
+    load = 1.0 + 0.5 * (t >= 5.0) + 1.5 * (t >= 20.0)  # kg: a step below the knee (2.2 kg), then one past it
+    sink = foam_sink_mm(load, dt, q)
+    first, second = sink[int(19.9 / dt)] - sink[0], sink[-1] - sink[int(19.9 / dt)]
+    assert second / 1.5 > 3.0 * first / 0.5  # per kg: the plateau is far softer
+    assert sink[int(5.5 / dt)] - sink[0] < 0.5 * first  # half a second after the step it is still sinking
+
+
+def test_joint_slips_only_past_its_band() -> None:
+    t = np.arange(2000) * 0.01
+    wobble = 2.0 + 0.05 * np.sin(t)  # kg: inside the band
+    assert np.all(joint_slip(wobble, {"slip_kg": 0.1}) == 0.0)
+    swing = 2.0 + 0.5 * np.sin(t)
+    slip = joint_slip(swing, {"slip_kg": 0.1})
+    assert np.ptp(slip) == pytest.approx(0.8, abs=0.01)  # the swing less the band twice
+    behind = slip - (swing - 2.0)
+    rising = np.diff(swing) > 0
+    assert np.all(np.abs(behind) <= 0.1 + 1e-9) and np.min(behind[1:][rising]) == pytest.approx(-0.1)  # lags going up
+
+
+def test_bumper_acts_only_at_the_top_and_the_bridge_fades_when_the_temperature_settles() -> None:
+    dt, peak = 0.02, 4.0
+    u = _triangles(peak, dt, 20.0, 12)
+    t = np.arange(u.size) * dt
+    params = draw_params("twist_bearing", np.random.default_rng(9), peak)
+    base = BLIND7_CORES["twist_bearing"](u, dt, params)
+    warm = np.where(t < 30.0, 20.0, 30.0)
+    still = np.full_like(u, 20.0)
+    zero = np.zeros_like(u)
+    q = {"softening_per_k": 0.05, "contact_share": 0.65, "bumper_ratio": 1.0, "bumper_tau_s": 20.0}
+    change = render(params, u, dt, "bumper_softening", q, zero, warm, base)
+    change -= render(params, u, dt, "bumper_softening", q, zero, still, base)
+    low = base < 0.45 * np.max(base)
+    assert np.max(np.abs(change[low])) < 0.01 * np.ptp(base) and np.max(change[~low]) > 0.05 * np.ptp(base)
+    qb = {"bridge_mm_per_k": 0.1, "near_tau_s": 5.0, "far_tau_s": 20.0, "gain_slope": 1.0}
+    change = render(params, u, dt, "coil_gradient_bridge", qb, zero, warm, base)
+    change -= render(params, u, dt, "coil_gradient_bridge", qb, zero, still, base)
+    after = np.abs(change[(t > 35.0) & (t < 55.0)])
+    settled = np.abs(change[t > 220.0])
+    assert np.max(after) > 0.3 and np.max(settled) < 0.05 * np.max(after)
+
+
+def test_ising_crossings_release_in_avalanches_with_return_point_memory() -> None:
+    params = draw_params("ising_crossings", np.random.default_rng(11), 4.0)
+    up = np.linspace(0.0, 1.0, 4001)
+    locked = ising_locked_share(up, params)
+    jumps = np.diff(locked) * 96
+    assert locked[0] == 0.0 and locked[-1] == 1.0 and np.all(jumps >= -1e-9) and np.max(jumps) >= 2.0  # avalanches
+    path = np.concatenate([up[:2400], up[2400:1600:-1], up[1600:2400], up[2400:]])  # a minor loop, then on
+    again = ising_locked_share(path, params)
+    assert np.array_equal(again[-1600:], locked[-1600:])  # back on the branch it left: return-point memory
+
+
+def test_measurement_is_deterministic_by_seed() -> None:
+    assert_deterministic_by_seed(CASES, blind7_measurement)
+
+
+@pytest.mark.parametrize("duration_s", [40.0, 300.0])
+def test_any_duration_builds(duration_s: float) -> None:
+    assert_any_duration_builds(blind7_cases, blind7_measurement, duration_s)
+
+
+@pytest.mark.parametrize("core", list(BLIND7_CORES))
+def test_core_draws_a_closed_loop_3_to_20_percent_wide_descending_above_ascending(core: str) -> None:
+    # the PWM ripple (in the muscle after the hose) moves a stick-slip jump or an avalanche by a
+    # sample from one cycle to the next: the jumpy cores are closed to 3 % of their span
+    settled = 0.03 if core in ("ising_crossings", "detent_carriage") else 0.02
+    assert_closed_loop_3_to_20_percent_wide(BLIND7_CORES[core], partial(draw_params, core), settled_share=settled)
+
+
+@pytest.mark.parametrize("protocol", list(BLIND7_PROTOCOLS))
+def test_protocols_start_vented_precondition_early_and_then_keep_covering_it(protocol: str) -> None:
+    dt, peak = 1.0 / 44.0, 4.0
+    for seed in range(3):
+        u = with_preconditioning(protocol, 60.0, dt, peak, np.random.default_rng(seed))
+        assert u.size == 2640 and np.all(np.isfinite(u)) and np.all(u[:22] == 0.0)
+        early = int(0.15 * u.size)
+        assert u.min() >= 0.0 and u.max() <= peak and np.max(u[:early]) >= 0.96 * peak
+        lead = u[: int(5.0 / dt)]
+        assert np.count_nonzero(np.diff(np.sign(lead - 0.5 * peak)) > 0) >= 3  # three preconditioning cycles
+        body = u[early:]
+        assert np.ptp(body) > 0.35 * peak
+        crossings = np.count_nonzero(np.diff(np.sign(body - 0.5 * peak)) != 0)
+        assert crossings >= 2  # the range is covered again, not once
