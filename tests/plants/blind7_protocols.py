@@ -21,6 +21,7 @@ raised-cosine blend into the protocol's first value.
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable
 
 import numpy as np
@@ -38,13 +39,14 @@ def _t(duration_s: float, dt_s: float) -> Array:
 
 def relay_autotune(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """A relay between ``c - d`` and ``c + d`` (``c`` 0.35-0.65, ``d`` 0.2-0.33 ``peak``)
-    switching when a first-order model of the stroke (0.3-1.2 s) crosses ``c`` +- a hysteresis
-    of 0.02-0.05 ``peak``; ``c`` and ``d`` redrawn every 20-40 s; the valve's steps smoothed
-    over 30 ms."""
+    switching when a model of the stroke (a first-order lag of 0.3-1.2 s after a dead time of
+    0.1-0.4 s, the loop's valve, hose and sensor) crosses ``c`` +- a hysteresis of 0.02-0.05
+    ``peak``; ``c`` and ``d`` redrawn every 20-40 s; the valve's steps smoothed over 30 ms."""
     t = _t(duration_s, dt_s)
     out = np.empty_like(t)
     tau, eps = float(rng.uniform(0.3, 1.2)), float(rng.uniform(0.02, 0.05))
     keep = float(np.exp(-dt_s / tau))
+    dead = deque([0.0] * max(int(round(float(rng.uniform(0.1, 0.4)) / dt_s)), 1))  # the levels on their way
     model, high, next_change = 0.0, True, 0.0
     centre = amp = 0.0
     for i, now in enumerate(t.tolist()):
@@ -52,7 +54,9 @@ def relay_autotune(duration_s: float, dt_s: float, peak: float, rng: np.random.G
             centre, amp = float(rng.uniform(0.35, 0.65)), float(rng.uniform(0.2, 0.33))
             next_change = now + float(rng.uniform(20.0, 40.0))
         level = centre + amp if high else centre - amp
-        model = level + (model - level) * keep
+        dead.append(level)
+        arrived = dead.popleft()
+        model = arrived + (model - arrived) * keep
         if high and model > centre + eps:
             high = False
         elif not high and model < centre - eps:
