@@ -311,8 +311,8 @@ def test_rate_forms_grow_with_the_input_speed(plant: str) -> None:
         for u in slow_and_fast_triangles(peak, dt):
             sizes.append(_rms(_render(plant, params, u, dt, form, q) - _render(plant, params, u, dt, "none", q)))
         assert sizes[1] > 2.0 * sizes[0], (form, sizes)
-        if form == "shear_thickening_fill":  # below its critical speed the fill hardly lags at all
-            assert sizes[1] > 5.0 * sizes[0], sizes
+        if form == "shear_thickening_fill" and plant != "detent_carriage":  # the detent's slips are fast moves
+            assert sizes[1] > 5.0 * sizes[0], sizes  # below its critical speed the fill hardly lags at all
 
 
 def test_eddy_brake_lag_is_capped_at_its_hold() -> None:

@@ -153,18 +153,18 @@ def columns(t: Array, u: Array, peak: float, rng: np.random.Generator) -> tuple[
 def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict[str, float]:
     """The drawn constants of ``effect`` in ``form`` (units in the key names or below)."""
     if form == "eddy_current_brake":  # the brake's hold [mm of stroke lag]; critical speed [mm/s]
-        return {"brake_hold_mm": rng.uniform(0.2, 0.8), "critical_mm_s": rng.uniform(15.0, 60.0)}
+        return {"brake_hold_mm": rng.uniform(0.3, 1.5), "critical_mm_s": rng.uniform(15.0, 60.0)}
     if form == "shear_thickening_fill":  # lag below the critical speed [s]; critical speed [mm/s]; exponent
         return {
-            "fill_tau_s": rng.uniform(0.004, 0.015),
-            "thickening_mm_s": rng.uniform(4.0, 12.0),
-            "thickening_power": rng.uniform(1.5, 3.0),
+            "fill_tau_s": rng.uniform(0.0008, 0.003),
+            "thickening_mm_s": rng.uniform(5.0, 15.0),
+            "thickening_power": rng.uniform(1.2, 2.2),
         }
     if form == "andrade_hereditary":  # share of span per unit stress after 20 s; stress exponent
-        return {"andrade_share": rng.uniform(0.02, 0.06), "stress_power": rng.uniform(1.0, 2.0)}
+        return {"andrade_share": rng.uniform(0.03, 0.1), "stress_power": rng.uniform(1.0, 2.0)}
     if form == "fitting_pullout":  # share of span after 20 s at peak; threshold [peak]; power; barb bite
         return {
-            "pullout_share": rng.uniform(0.02, 0.06),
+            "pullout_share": rng.uniform(0.03, 0.1),
             "pullout_threshold": rng.uniform(0.3, 0.55),
             "pullout_power": rng.uniform(1.0, 2.5),
             "barb_bite": rng.uniform(0.5, 2.0),
@@ -187,27 +187,27 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
         return {
             "pad_scale": 1.0,
             "elastic_mm_per_kg": rng.uniform(0.02, 0.06),
-            "plateau_mm_per_kg": rng.uniform(0.15, 0.4),
-            "knee_offset_kg": rng.uniform(-0.3, 0.8),
+            "plateau_mm_per_kg": rng.uniform(0.4, 1.2),
+            "knee_offset_kg": rng.uniform(-0.2, 0.5),
             "knee_width_kg": rng.uniform(0.15, 0.4),
             "foam_tau_s": rng.uniform(0.5, 3.0),
         }
     if form == "joint_slip_tilt":  # tilt reading [mm/kg at the arm's root]; slip band [kg]; arm [mm]
         return {
-            "tilt_mm_per_kg": rng.uniform(0.1, 0.4),
-            "slip_kg": rng.uniform(0.05, 0.2),
+            "tilt_mm_per_kg": rng.uniform(0.2, 0.6),
+            "slip_kg": rng.uniform(0.03, 0.12),
             "arm_mm": rng.uniform(40.0, 120.0),
         }
     if form == "bumper_softening":  # softening [1/K]; contact [share of stroke]; stiffness ratio; lag [s]
         return {
-            "softening_per_k": rng.uniform(0.02, 0.06),
-            "contact_share": rng.uniform(0.5, 0.75),
+            "softening_per_k": rng.uniform(0.04, 0.1),
+            "contact_share": rng.uniform(0.4, 0.7),
             "bumper_ratio": rng.uniform(0.5, 2.0),
             "bumper_tau_s": rng.uniform(15.0, 40.0),
         }
     if form == "coil_gradient_bridge":  # reading per K of difference [mm/K]; lags [s]; gain slope
         return {
-            "bridge_mm_per_k": rng.uniform(0.05, 0.2),
+            "bridge_mm_per_k": rng.uniform(0.1, 0.3),
             "near_tau_s": rng.uniform(3.0, 10.0),
             "far_tau_s": rng.uniform(25.0, 80.0),
             "gain_slope": rng.uniform(0.5, 1.5),
