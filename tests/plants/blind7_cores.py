@@ -11,9 +11,11 @@ effect (:mod:`tests.plants.blind7_effects`) acts on the contraction after the co
   its own random threshold (the local fibre tension) and its two neighbours along the helix (a
   locked neighbour helps it lock: ferromagnetic coupling), so crossings release in avalanches and
   the memory is the lattice's configuration (return-point memory from no-passing, not a sum of
-  independent relays); the locked share takes a part of the pressure, on an *exponential-linear*
-  force map (Sarosi's form for Festo muscles, ``F = p A ((1 + a) e^(-x / x0) - a)``) against a
-  payload and a spring, solved by bisection.
+  independent relays). Crossings lock as the pressure presses the fibres together and release
+  as it falls; a share ``rho`` of the pressure acts through the crossings, so only the locked
+  share of it reaches the stroke. The force map is *exponential-linear*, ``F = p A ((1 + a)
+  e^(-x / x0) - a)`` (a reduced form of Sarosi's law for Festo muscles, eq. 15 of Ai et al. 2019
+  in the seeds, with its ``a = c = e = 0``), against a payload and a spring, solved by bisection.
 * :func:`detent_carriage`: the payload carriage runs on a *cogged* rail (a periodic detent
   potential of 0.15-0.4 mm pitch: a Prandtl-Tomlinson slider): the muscle (a cubic datasheet
   force map) and the return spring pull it through the detents, it sits in a local minimum of

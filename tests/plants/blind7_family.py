@@ -6,7 +6,7 @@ were read, to make this one different from all of them. It is to be scored once,
 numbers, and never used to choose or tune anything.
 
 * Four cores (:mod:`tests.plants.blind7_cores`): a random-field Ising chain of braid crossings
-  (avalanches, a lattice memory) on Sarosi's exponential-linear force map; a Prandtl-Tomlinson
+  (avalanches, a lattice memory) on a reduced Sarosi (exponential-linear) force map; a Prandtl-Tomlinson
   carriage on a cogged rail (multistable wells, stick-slip jumps) on a cubic force map; a
   Valanis endochronic sleeve (a fading hereditary memory over the pressure's path length) on a
   hyperbolic force map; a twist-coupled braid whose end cap turns in a thrust bearing (a play in
