@@ -6,11 +6,12 @@ were read, to make this one different from all of them. It is to be scored once,
 numbers, and never used to choose or tune anything.
 
 * Four cores (:mod:`tests.plants.blind7_cores`): a random-field Ising chain of braid crossings
-  (avalanches, a lattice memory) on a reduced Sarosi (exponential-linear) force map; a Prandtl-Tomlinson
-  carriage on a cogged rail (multistable wells, stick-slip jumps) on a cubic force map; a
-  Valanis endochronic sleeve (a fading hereditary memory over the pressure's path length) on a
-  hyperbolic force map; a twist-coupled braid whose end cap turns in a thrust bearing (a play in
-  a hidden angle, its radius set by the stroke) on an exponential-saturation stroke map.
+  (avalanches, a lattice memory) on a reduced Sarosi (exponential-linear) force map; a
+  Prandtl-Tomlinson carriage on a cogged rail (multistable wells, stick-slip jumps) on a cubic
+  force map; a Valanis endochronic sleeve (a fading hereditary memory over the pressure's path
+  length) on a hyperbolic force map; a twist-coupled braid whose end cap turns in a thrust
+  bearing (a play in a hidden angle, its radius set by the stroke) on an exponential-saturation
+  stroke map.
 * Five protocols (:mod:`tests.plants.blind7_protocols`): relay autotuning, fatigue cycling with
   reference cycles, a DMA amplitude sweep, an oscillometric cuff (stepwise deflation), an ISO
   230-2 bidirectional positioning test; each starts vented and is preconditioned by three
