@@ -1,6 +1,6 @@
 """Ceiling of ``pmactl diagnose`` on the test plants: which hidden effects could *any* candidate name?
 
-Usage: python bench/diagnose_ceiling.py [--set fresh,blind,blind2,blind3,blind4,blind5,blind6] [--duration S]
+Usage: python bench/diagnose_ceiling.py [--set fresh,blind,blind2,blind3,blind4,blind5,blind6,blind7] [--duration S]
        [--workers N] [--only TEXT] [--json OUT]      (default: --set blind4 --duration 100)
 
 For every effect record the plant family knows the effect's own noise-free waveform (the output
@@ -60,6 +60,7 @@ SETS = {
     "blind4": ("tests.plants.blind4_family", "blind4_cases"),
     "blind5": ("tests.plants.blind5_family", "blind5_cases"),
     "blind6": ("tests.plants.blind6_family", "blind6_cases"),
+    "blind7": ("tests.plants.blind7_family", "blind7_cases"),
 }
 
 

@@ -1,6 +1,6 @@
 """Scorecard of ``pmactl diagnose`` on the test plants: the tuning set and the fresh held-out set.
 
-Usage: python bench/diagnose_scorecard.py [--set tuning|fresh|blind|blind2|...|blind6|both|all]
+Usage: python bench/diagnose_scorecard.py [--set tuning|fresh|blind|blind2|...|blind7|both|all]
        [--duration S] [--only TEXT] [--json OUT]
 
 Prints one line per record (plant, effect:form, protocol, rate, verdict, confidence, held-out
@@ -16,7 +16,8 @@ too), scored once for v6 and then used with the others to calibrate v7's gain fl
 (tests/plants/blind3_family.py, built blind for v7) is the set v7 was scored on once, and
 blind4 (tests/plants/blind4_family.py, built blind for v8) the set v8 was scored on once, and
 blind5 and blind6 (tests/plants/blind5_family.py, blind6_family.py, built blind for v9) the sets
-v9 was scored on once each (blind5 before v9's thermal-lag terms, blind6 after).
+v9 was scored on once each (blind5 before v9's thermal-lag terms, blind6 after), and blind7
+(tests/plants/blind7_family.py, built blind for v10) the set v10 was scored on once.
 ``both`` is tuning + fresh; ``all`` adds the blind sets.
 """
 
@@ -44,6 +45,7 @@ from tests.plants.blind3_family import blind3_cases, blind3_measurement  # noqa:
 from tests.plants.blind4_family import blind4_cases, blind4_measurement  # noqa: E402
 from tests.plants.blind5_family import blind5_cases, blind5_measurement  # noqa: E402
 from tests.plants.blind6_family import blind6_cases, blind6_measurement  # noqa: E402
+from tests.plants.blind7_family import blind7_cases, blind7_measurement  # noqa: E402
 from tests.plants.blind_family import blind_cases, blind_measurement  # noqa: E402
 from tests.plants.family import Case, measurement, tuning_cases  # noqa: E402
 from tests.plants.fresh_family import fresh_cases, fresh_measurement  # noqa: E402
@@ -57,6 +59,7 @@ SETS = {
     "blind4": (blind4_cases, blind4_measurement),
     "blind5": (blind5_cases, blind5_measurement),
     "blind6": (blind6_cases, blind6_measurement),
+    "blind7": (blind7_cases, blind7_measurement),
 }
 
 
