@@ -289,7 +289,7 @@ def transport_delay(ctx: Context) -> Design | None:
         return None
     pairs = [(d, ctx.lag_s) for d in usable]
     if ctx.joint_delay:
-        shorter = [lag for lag in ctx.lag_rows if lag < ctx.lag_s]
+        shorter = [lag for lag in ctx.lag_rows if 0 <= lag < ctx.lag_s]
         pairs += [(d, lag) for lag in shorter for d in JOINT_DELAYS_S if d in usable]
 
     def design(index: float, iterations: int) -> Design:

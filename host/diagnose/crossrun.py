@@ -35,7 +35,7 @@ from edge.errors import DataError
 from host.data import Measurement
 from host.diagnose.candidates import CREEP_TAUS_S, DELAYS_S, MIN_DELAY_SAMPLES
 from host.diagnose.decide import CROSSRUN_GAIN_FLOOR, CandidateScore, why_not
-from host.diagnose.features import branch_offset, first_order, slow_part, smoothed_rate
+from host.diagnose.features import actuator_input, branch_offset, slow_part, smoothed_rate
 from host.diagnose.folds import holdout_masks, noise_floor
 from host.diagnose.hammerstein import FittedModel, _steady_state, fit_hammerstein, rmse
 from host.diagnose.run import (
@@ -43,6 +43,7 @@ from host.diagnose.run import (
     PREISACH_LEVELS,
     choose_actuator_lag,
     fit_baseline,
+    input_lead_note,
     known_memory,
     prepare,
     samples_needed,
@@ -184,6 +185,8 @@ def cross_run(
     train, _ = decimated(train)
     ctx, _, train_notes = prepare(train, levels)
     ctx.lag_s = choose_actuator_lag(ctx)
+    if ctx.lag_s < 0:
+        train_notes.append(input_lead_note(ctx.lag_s))
     model = fit_baseline(ctx)
     train_rmse = rmse(model.prediction, ctx.y)
     grid = EverettGrid(float(train.u.min()), float(train.u.max()), levels)
@@ -195,7 +198,7 @@ def cross_run(
             raise DataError(f"{test.source}: {len(test)} samples is too short; record at least {MIN_SAMPLES}")
         start, assumed = known_memory(test.u, test.source, needed=samples_needed(folds))
         notes += assumed
-        lagged_u = first_order(test.u, test.dt, ctx.lag_s)
+        lagged_u = actuator_input(test.u, test.dt, ctx.lag_s)
         rows = rows_on_grid(lagged_u, grid, start)
         sl = slice(start.index, None)
         y, u = test.y[sl], test.u[sl]

@@ -47,6 +47,19 @@ def first_order(u: NDArray[np.float64], dt: float, tau_s: float) -> NDArray[np.f
     return lfilter([alpha], [1.0, alpha - 1.0], u, axis=0, zi=u[:1] * (1 - alpha))[0]
 
 
+def actuator_input(u: NDArray[np.float64], dt: float, lag_s: float) -> NDArray[np.float64]:
+    """What drives the hysteresis for a recorded input ``u``: ``u`` through a first-order
+    actuator lag of ``lag_s`` >= 0 [s]; for ``lag_s`` < 0 the inverse of a first-order lag of
+    ``-lag_s`` (the recorded input is the driving pressure read through a lag of its own: a
+    snubber or an RC filter on the transducer, the exact inverse of :func:`first_order`'s
+    discretisation; it amplifies the input's noise by up to ``2 / alpha``)."""
+    if lag_s >= 0:
+        return first_order(u, dt, lag_s)
+    alpha = 1.0 - np.exp(dt / lag_s)
+    previous = np.concatenate([u[:1], u[:-1]])
+    return (u - (1.0 - alpha) * previous) / alpha
+
+
 def slow_part(x: NDArray[np.float64], dt: float, tau_s: float) -> NDArray[np.float64]:
     """``lowpass(x, tau) - x``: what a first-order creep element with time constant ``tau`` adds
     (column by column for a 2-D array)."""

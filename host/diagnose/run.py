@@ -60,7 +60,7 @@ from host.diagnose.decide import (
     with_signatures,
 )
 from host.diagnose.evidence import baseline_evidence
-from host.diagnose.features import branch_offset, first_order, preisach_rows, smoothed_rate
+from host.diagnose.features import actuator_input, branch_offset, preisach_rows, smoothed_rate
 from host.diagnose.folds import BLOCKS_PER_FOLD, MIN_BLOCK_SAMPLES, check_folds, holdout_masks, noise_floor
 from host.diagnose.hammerstein import FittedModel, fit_hammerstein, rmse
 from host.diagnose.signatures import signatures
@@ -70,8 +70,12 @@ __all__ = ["CAUSES", "Diagnosis", "detection_limits", "diagnose", "held_out_scor
 
 # first-order actuator (valve + mechanics) lag before the hysteresis, part of the baseline's
 # dynamics (seed 004: a PAM is a first-order lag plus a dead time); up to 250 ms, so that a plant
-# with more lag than a valve alone does not leave a lag a short dead time then "explains"
-ACTUATOR_LAGS_S = (0.0, 0.02, 0.05, 0.1, 0.17, 0.25)
+# with more lag than a valve alone does not leave a lag a short dead time then "explains".
+# Negative: the recorded input is the driving pressure read through a first-order lag of its own
+# (a snubber or an RC filter on the transducer), undone by its inverse; at least half a sample.
+# A rate weight's branch x speed term is such a lead to first order: without it rate dependence
+# was named on effect-free records of a braid read through a 4-15 ms snubber (+38 %; +5 % with it)
+ACTUATOR_LAGS_S = (-0.025, -0.012, -0.006, 0.0, 0.02, 0.05, 0.1, 0.17, 0.25)
 MIN_SAMPLES = 400
 # Everett grid intervals of the baseline: 12 left 2-5x the effect sizes of foreign plants as model
 # error (tuning plants); 16 halves it at 1.7x the cost
@@ -232,7 +236,7 @@ def prepare(
     start, notes = known_memory(m.u, m.source, assume_state, needed)
     sl = slice(start.index, None)
     extras = {k: v[sl] for k, v in m.extras.items() if k in ("load", "temperature")}
-    lag_rows = {lag: preisach_rows(first_order(m.u, m.dt, lag), start, levels) for lag in ACTUATOR_LAGS_S}
+    lag_rows = {lag: preisach_rows(actuator_input(m.u, m.dt, lag), start, levels) for lag in actuator_lags(m.dt)}
     ctx = Context(
         m.t[sl],
         m.u[sl],
@@ -247,12 +251,27 @@ def prepare(
     return ctx, start.index, notes
 
 
+def actuator_lags(dt: float) -> list[float]:
+    """The actuator lags of :data:`ACTUATOR_LAGS_S` a record sampled every ``dt`` [s] can show:
+    leads of at least half a sample."""
+    return [lag for lag in ACTUATOR_LAGS_S if lag >= 0 or -lag >= 0.5 * dt]
+
+
+def input_lead_note(lag_s: float) -> str:
+    """What a negative actuator lag says about the rig."""
+    return (
+        f"the output leads the recorded input: the baseline reads the input through the inverse of a "
+        f"{-lag_s * 1e3:g} ms lag (a snubber or a filter on the pressure transducer, a channel sampled late); "
+        "a faster pressure reading at the muscle's port removes it"
+    )
+
+
 def choose_actuator_lag(ctx: Context) -> float:
-    """The actuator lag whose baseline fits the whole record best (one discrete setting shared by
-    every candidate, so choosing it on all rows favours no candidate)."""
+    """The actuator lag (or input lead: negative) whose baseline fits the whole record best (one
+    discrete setting shared by every candidate, so choosing it on all rows favours no candidate)."""
     every = np.ones(ctx.y.size, dtype=bool)
     errors = {}
-    for lag in ACTUATOR_LAGS_S:
+    for lag in ctx.lag_rows:
         model, _ = fit_hammerstein("baseline", ctx.lag_rows[lag], ctx.y, every, ctx.dt)
         errors[lag] = rmse(model.prediction, ctx.y)
     return min(errors, key=lambda lag: errors[lag])
@@ -429,6 +448,8 @@ def _diagnose(
     masks = holdout_masks(n, folds, blocks_per_fold)
     with _progress(2 + len(CAUSES), progress) as bar:
         ctx.lag_s = choose_actuator_lag(ctx)
+        if ctx.lag_s < 0:
+            notes.append(input_lead_note(ctx.lag_s))
         baseline_full = fit_baseline(ctx)
         found = signatures(
             ctx.y - baseline_full.prediction,
@@ -436,7 +457,7 @@ def _diagnose(
             baseline_full.prediction,
             ctx.u,
             ctx.dt,
-            settle_s=SETTLE_S + 5.0 * ctx.lag_s,
+            settle_s=SETTLE_S + 5.0 * max(ctx.lag_s, 0.0),
         )
         delay_signature = found.get("transport_delay")
         ctx.joint_delay = delay_signature is not None and delay_signature.p_value <= JOINT_DELAY_P
