@@ -27,7 +27,7 @@ from functools import partial
 import numpy as np
 from numpy.typing import NDArray
 
-from host.diagnose.features import first_order, slow_part, velocity_squared_lag
+from host.diagnose.features import actuator_input, direction_delayed, first_order, slow_part, velocity_squared_lag
 from host.diagnose.hammerstein import FittedModel, fit_gains, fit_hammerstein, rmse
 
 CAUSES = (
@@ -75,6 +75,9 @@ class Context:
     output_rate: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     joint_delay: bool = False  # screen a dead time jointly with the shorter actuator lags
     ar: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))  # the baseline's poles
+    # Preisach rows of a filter of the whole input (its history before the memory start
+    # included); None: only the precomputed ``lag_rows`` exist
+    rows_after: Callable[[Callable[[NDArray[np.float64]], NDArray[np.float64]]], NDArray[np.float32]] | None = None
 
     @property
     def rows(self) -> NDArray[np.float32]:
@@ -270,7 +273,9 @@ def creep(ctx: Context) -> Design:
 
 
 def transport_delay(ctx: Context) -> Design | None:
-    """A dead time before the hysteresis, the hysteresis and dynamics refitted with it.
+    """A dead time before the hysteresis, the hysteresis and dynamics refitted with it; the
+    better (whole-record RMSE) of one dead time and one that differs between rising and falling
+    input (:func:`direction_dependent_delay`).
 
     The baseline's actuator lag was chosen without a dead time, and a lag absorbs much of one
     (a 0.25 s lag for a 0.2 s dead time); so with ``ctx.joint_delay`` the dead time is screened
@@ -281,10 +286,7 @@ def transport_delay(ctx: Context) -> Design | None:
         rows = ctx.lag_rows[lag_s]
         return np.concatenate([np.repeat(rows[:1], steps, axis=0), rows[:-steps]])
 
-    longest = 0.1 * ctx.y.size * ctx.dt  # a shift of at most a tenth of the record
-    # a shift of one or two samples is within what the model's own resolution (Everett grid,
-    # rate smoothing) produces on a plant without any delay; evidence starts at 3 samples
-    usable = [d for d in DELAYS_S if MIN_DELAY_SAMPLES * ctx.dt <= d <= longest]
+    usable = usable_delays(ctx)
     if not usable:
         return None
     pairs = [(d, ctx.lag_s) for d in usable]
@@ -296,6 +298,47 @@ def transport_delay(ctx: Context) -> Design | None:
         delay_s, lag_s = pairs[int(index)]
         x, ar = _hysteresis(ctx, delayed_rows(delay_s, lag_s), ctx.y, iterations)
         extra = {"dead_time_s": delay_s, "actuator_lag_with_dead_time_s": lag_s}
+        return Design("transport_delay", x, _empty(ctx.y.size), [], ar, extra=extra)
+
+    one = _best_of([float(i) for i in range(len(pairs))], design, ctx)
+    two = direction_dependent_delay(ctx, one.extra["dead_time_s"], one.extra["actuator_lag_with_dead_time_s"])
+    if two is None:
+        return one
+    every = np.ones(ctx.y.size, dtype=bool)
+    return min((one, two), key=lambda d: _training_error(d.fit(ctx, every), ctx))
+
+
+def usable_delays(ctx: Context) -> list[float]:
+    """The dead times of :data:`DELAYS_S` the record can show: at least :data:`MIN_DELAY_SAMPLES`
+    samples (a shift of one or two samples is within what the model's own resolution, the Everett
+    grid and the rate smoothing, produces on a plant without any delay) and at most a tenth of
+    the record."""
+    return [d for d in DELAYS_S if MIN_DELAY_SAMPLES * ctx.dt <= d <= 0.1 * ctx.y.size * ctx.dt]
+
+
+# the other direction's dead time, as a share of the one found for both
+OTHER_DIRECTION_SHARES = (0.0, 0.5, 2.0)
+
+
+def direction_dependent_delay(ctx: Context, delay_s: float, lag_s: float) -> Design | None:
+    """A dead time of ``delay_s`` in one direction of the input and a share of
+    :data:`OTHER_DIRECTION_SHARES` of it in the other (:func:`direction_delayed`; after the
+    actuator lag ``lag_s``): a pilot valve that opens late but exhausts at once, a long supply
+    line that fills slower than it vents. None when the input's history is not available."""
+    if ctx.rows_after is None:
+        return None
+    rows_after, longest = ctx.rows_after, 0.1 * ctx.y.size * ctx.dt
+    others = [share * delay_s for share in OTHER_DIRECTION_SHARES if share * delay_s <= longest]
+    pairs = [(delay_s, other) for other in others] + [(other, delay_s) for other in others]
+
+    def design(index: float, iterations: int) -> Design:
+        rise_s, fall_s = pairs[int(index)]
+
+        def arriving(u: NDArray[np.float64]) -> NDArray[np.float64]:
+            return direction_delayed(actuator_input(u, ctx.dt, lag_s), ctx.dt, rise_s, fall_s)
+
+        x, ar = _hysteresis(ctx, rows_after(arriving), ctx.y, iterations)
+        extra = {"dead_time_rise_s": rise_s, "dead_time_fall_s": fall_s, "actuator_lag_with_dead_time_s": lag_s}
         return Design("transport_delay", x, _empty(ctx.y.size), [], ar, extra=extra)
 
     return _best_of([float(i) for i in range(len(pairs))], design, ctx)

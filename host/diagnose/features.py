@@ -60,6 +60,18 @@ def actuator_input(u: NDArray[np.float64], dt: float, lag_s: float) -> NDArray[n
     return (u - (1.0 - alpha) * previous) / alpha
 
 
+def direction_delayed(u: NDArray[np.float64], dt: float, rise_s: float, fall_s: float) -> NDArray[np.float64]:
+    """``u`` through a dead time that depends on where it is going [s]: a value sent while the
+    input rises arrives ``rise_s`` later, one sent while it falls ``fall_s`` later (a valve that
+    opens late and exhausts early, or the reverse). Nothing overtakes what was sent before it:
+    a value that would arrive earlier waits for its predecessor."""
+    index = np.arange(u.size, dtype=np.float64)
+    rising = smoothed_rate(u, dt) > 0
+    arrival = np.maximum.accumulate(index + np.where(rising, rise_s, fall_s) / dt)
+    arrival += index * 1e-9  # strictly increasing for the interpolation
+    return np.interp(index, arrival, u, left=u[0])
+
+
 def slow_part(x: NDArray[np.float64], dt: float, tau_s: float) -> NDArray[np.float64]:
     """``lowpass(x, tau) - x``: what a first-order creep element with time constant ``tau`` adds
     (column by column for a 2-D array)."""

@@ -247,8 +247,19 @@ def prepare(
         extras,
         m.dt,
         output_rate=smoothed_rate(m.y, m.dt)[sl],
+        rows_after=partial(rows_after_filter, m.u, start, levels),
     )
     return ctx, start.index, notes
+
+
+def rows_after_filter(
+    u: NDArray[np.float64],
+    start: MemoryStart,
+    levels: int,
+    input_filter: Callable[[NDArray[np.float64]], NDArray[np.float64]],
+) -> NDArray[np.float32]:
+    """Preisach rows (from ``start``) of the whole input ``u`` after ``input_filter``."""
+    return preisach_rows(input_filter(u), start, levels)
 
 
 def actuator_lags(dt: float) -> list[float]:
