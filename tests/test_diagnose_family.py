@@ -10,7 +10,8 @@ scored once, at its end, then used with the other three to calibrate v7's gain f
 ``tests/plants/blind3_family.py`` the fifth, built blind for v7 and scored once, at its end;
 ``tests/plants/blind4_family.py`` the sixth, built blind for v8 and scored once, at its end;
 ``tests/plants/blind5_family.py`` the seventh and ``tests/plants/blind6_family.py`` the eighth,
-built blind for v9 and scored once each (blind5 before v9's thermal-lag terms, blind6 after).
+built blind for v9 and scored once each (blind5 before v9's thermal-lag terms, blind6 after);
+``tests/plants/blind7_family.py`` the ninth, built blind for v10 and scored once, at its end.
 The targets are the
 issue's, on the held-out set: at least 90 % of the effects named, at most 1 false alarm in 10
 effect-free records. ``python bench/diagnose_scorecard.py`` prints the same tables with every verdict.
@@ -31,6 +32,7 @@ from tests.plants.blind3_family import blind3_cases, blind3_measurement
 from tests.plants.blind4_family import blind4_cases, blind4_measurement
 from tests.plants.blind5_family import blind5_cases, blind5_measurement
 from tests.plants.blind6_family import blind6_cases, blind6_measurement
+from tests.plants.blind7_family import blind7_cases, blind7_measurement
 from tests.plants.blind_family import blind_cases, blind_measurement
 from tests.plants.family import Case, measurement, tuning_cases
 from tests.plants.fresh_family import fresh_cases, fresh_measurement
@@ -51,14 +53,15 @@ class Family:
 
 
 FAMILIES = {
-    "tuning": Family(tuning_cases, measurement, 15, 35, 1, 20),
+    "tuning": Family(tuning_cases, measurement, 16, 35, 1, 20),
     "fresh": Family(fresh_cases, fresh_measurement, 11, 40, 1, 20),
     "blind": Family(blind_cases, blind_measurement, 12, 40, 0, 20),
     "blind2": Family(blind2_cases, blind2_measurement, 15, 40, 1, 20),
     "blind3": Family(blind3_cases, blind3_measurement, 8, 40, 0, 20),
-    "blind4": Family(blind4_cases, blind4_measurement, 9, 40, 0, 20),
-    "blind5": Family(blind5_cases, blind5_measurement, 12, 40, 0, 20),
-    "blind6": Family(blind6_cases, blind6_measurement, 14, 40, 4, 20),
+    "blind4": Family(blind4_cases, blind4_measurement, 10, 40, 0, 20),
+    "blind5": Family(blind5_cases, blind5_measurement, 13, 40, 0, 20),
+    "blind6": Family(blind6_cases, blind6_measurement, 14, 40, 0, 20),
+    "blind7": Family(blind7_cases, blind7_measurement, 11, 40, 1, 20),
 }
 HELD_OUT = [name for name in FAMILIES if name != "tuning"]
 _VERDICTS: dict[str, list[tuple[str, str]]] = {}
@@ -116,10 +119,11 @@ def _alarms_over_target(name: str) -> pytest.MarkDecorator:
     ],
 )
 def test_at_most_one_false_alarm_in_ten_effect_free_held_out_records(name):
-    """Met on every held-out family but blind6 (4/20: a 6-14 Hz spool valve before the muscle that
-    the baseline's first-order actuator lag cannot follow reads as rate dependence; a strict
-    xfail). The fresh and blind2 sets were judged on while the method changed, blind3 to blind6
-    were scored once each at the end of the round they were built for."""
+    """Met on every held-out family but the ones marked (strict xfail). blind6 had 4/20 in v9 (an
+    input read through a 4-15 ms snubber: the output leads it, which a rate term fitted) and has
+    0/20 since the baseline can undo such a lag (v10). The fresh and blind2 sets were judged on
+    while the method changed, blind3 to blind7 were scored once each at the end of the round
+    they were built for."""
     alarms = named_and_alarms(family_verdicts(name))[1]
     assert alarms <= FAMILIES[name].effect_free / 10, family_verdicts(name)
 
