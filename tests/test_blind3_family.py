@@ -61,7 +61,7 @@ from tests.plants.properties import (
     slow_and_fast_triangles,
     step_and_hold,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE
+from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 40.0
 CASES = blind3_cases(DURATION_S)
@@ -70,10 +70,6 @@ CASES = blind3_cases(DURATION_S)
 @cache
 def _simulated(case: family.Case) -> dict[str, Any]:
     return simulate(case)
-
-
-def _rms(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(x * x)))
 
 
 def test_cases_cover_new_cores_forms_protocols_rates_and_columns() -> None:
@@ -143,7 +139,7 @@ def test_columns_act_only_in_their_own_effects_records(case: family.Case) -> Non
     still_temp = np.full_like(sim["temperature"], float(sim["temperature"][0]))
     for load, temp, which in ((still_load, sim["temperature"], "load"), (sim["load"], still_temp, "temperature")):
         again = render(core, params, sim["u"], dt, case.form, dict(q), load, temp)
-        change = _rms(again - sim["on"])
+        change = rms(again - sim["on"])
         if case.effect in (f"{which}_dependence", f"{which}_drift"):
             assert change > EFFECT_MIN_OVER_NOISE * truth["noise"] / 2.0, (which, change)
         else:
@@ -158,7 +154,7 @@ def test_effect_free_records_carry_the_sensor_confounds(plant: str) -> None:
     params, dt = sim["truth"]["plant_parameters"], 1.0 / case.rate_hz
     core_out = BLIND3_CORES[plant](sim["u"], dt, params)
     confound = sim["off"] - core_out
-    assert 0.03 <= _rms(confound) <= 0.5  # mm: bow and ripple of the nonlinearity, plus hum
+    assert 0.03 <= rms(confound) <= 0.5  # mm: bow and ripple of the nonlinearity, plus hum
     held = position_sensor(np.full(4000, 10.0), dt, params) - 10.0  # a still stroke: only the hum moves
     assert 0.005 <= float(np.std(held)) <= 0.03
 
@@ -212,7 +208,7 @@ def test_rate_forms_grow_with_the_input_speed(plant: str) -> None:
             temps, loads = np.full_like(u, 22.0), np.zeros_like(u)
             off = render(BLIND3_CORES[plant], params, u, dt, "none", q, loads, temps, base)
             on = render(BLIND3_CORES[plant], params, u, dt, form, q, loads, temps, base)
-            sizes.append(_rms(on - off))
+            sizes.append(rms(on - off))
         assert sizes[1] > 3.0 * sizes[0], (form, sizes)
 
 

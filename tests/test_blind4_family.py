@@ -65,7 +65,7 @@ from tests.plants.properties import (
     slow_and_fast_triangles,
     step_and_hold,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE
+from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 40.0
 CASES = blind4_cases(DURATION_S)
@@ -74,10 +74,6 @@ CASES = blind4_cases(DURATION_S)
 @cache
 def _simulated(case: family.Case) -> dict[str, Any]:
     return simulate(case)
-
-
-def _rms(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(x * x)))
 
 
 def test_cases_cover_new_cores_forms_protocols_rates_and_columns() -> None:
@@ -152,7 +148,7 @@ def test_columns_act_only_in_their_own_effects_records(case: family.Case) -> Non
     still_temp = np.full_like(sim["temperature"], float(sim["temperature"][0]))
     for load, temp, which in ((still_load, sim["temperature"], "load"), (sim["load"], still_temp, "temperature")):
         again = render(core, params, sim["u"], dt, case.form, dict(q), load, temp)
-        change = _rms(again - sim["on"])
+        change = rms(again - sim["on"])
         if case.effect in (f"{which}_dependence", f"{which}_drift"):
             assert change > EFFECT_MIN_OVER_NOISE * truth["noise"] / 2.0, (which, change)
         else:
@@ -169,7 +165,7 @@ def test_effect_free_records_carry_the_rig_confounds(plant: str) -> None:
     droop = supply_droop(sim["u"], dt, params)
     assert 0.003 <= float(np.max(1.0 - droop[sim["u"] > 0] / sim["u"][sim["u"] > 0])) <= 0.015
     confound = sim["off"] - core(sim["u"], dt, params)
-    assert 0.05 <= _rms(confound) <= 1.5  # mm: droop, play, plate and transducer together
+    assert 0.05 <= rms(confound) <= 1.5  # mm: droop, play, plate and transducer together
     still = rig_reading(np.full(int(200.0 / dt), 10.0), dt, params) - 10.0  # a still stroke, 200 s
     spikes = np.abs(still - np.median(still)) > 0.25
     assert 1 <= np.count_nonzero(spikes) <= 30  # rare spikes
@@ -228,7 +224,7 @@ def test_rate_forms_grow_with_the_input_speed(plant: str) -> None:
             temps, loads = np.full_like(u, 22.0), np.zeros_like(u)
             off = render(BLIND4_CORES[plant], params, u, dt, "none", q, loads, temps)
             on = render(BLIND4_CORES[plant], params, u, dt, form, q, loads, temps)
-            sizes.append(_rms(on - off))
+            sizes.append(rms(on - off))
         assert sizes[1] > 3.0 * sizes[0], (form, sizes)
 
 

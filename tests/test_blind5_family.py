@@ -70,7 +70,7 @@ from tests.plants.properties import (
     slow_and_fast_triangles,
     step_and_hold,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE
+from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 60.0
 CASES = blind5_cases(DURATION_S)
@@ -80,10 +80,6 @@ OLDER_FAMILIES = (family, fresh_family, blind_family, blind2_family, blind3_fami
 @cache
 def _simulated(case: family.Case) -> dict[str, Any]:
     return simulate(case)
-
-
-def _rms(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(x * x)))
 
 
 def test_cases_cover_new_cores_forms_protocols_rates_and_columns() -> None:
@@ -177,7 +173,7 @@ def test_columns_act_only_in_their_own_effects_records(case: family.Case) -> Non
     still_temp = np.full_like(sim["temperature"], float(sim["temperature"][0]))
     for load, temp, which in ((still_load, sim["temperature"], "load"), (sim["load"], still_temp, "temperature")):
         again = render(core, params, u, dt, case.form, dict(q), load, temp)
-        change = _rms(again - sim["on"])
+        change = rms(again - sim["on"])
         if case.effect in (f"{which}_dependence", f"{which}_drift"):
             assert change > EFFECT_MIN_OVER_NOISE * truth["noise"] / 2.0, (which, change)
         else:
@@ -203,7 +199,7 @@ def test_effect_free_records_carry_the_rig_confounds(plant: str) -> None:
     hum = still - np.convolve(still, np.ones(9) / 9.0, mode="same")
     assert 0.002 <= float(np.std(hum[20:-20])) <= 0.012  # mm: mains hum
     assert truth["dropped_frames"] >= 1 and truth["dropped_frames"] <= 0.01 * len(m)
-    assert 0.005 < _rms(sim["off"] - BLIND5_CORES[plant](u, dt, params)) < 0.1  # mm: settling and hum
+    assert 0.005 < rms(sim["off"] - BLIND5_CORES[plant](u, dt, params)) < 0.1  # mm: settling and hum
 
 
 @pytest.mark.parametrize("case", CASES[::3], ids=lambda c: c.name)
@@ -269,7 +265,7 @@ def test_rate_forms_grow_with_the_input_speed(plant: str) -> None:
             temps, loads = np.full_like(u, 22.0), np.zeros_like(u)
             off = render(BLIND5_CORES[plant], params, u, dt, "none", q, loads, temps)
             on = render(BLIND5_CORES[plant], params, u, dt, form, q, loads, temps)
-            sizes.append(_rms(on - off))
+            sizes.append(rms(on - off))
         assert sizes[1] > 2.0 * sizes[0], (form, sizes)
 
 

@@ -74,8 +74,9 @@ from tests.plants.properties import (
     assert_effect_size_as_recorded,
     slow_and_fast_triangles,
     step_and_hold,
+    triangles,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE
+from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 60.0
 CASES = blind6_cases(DURATION_S)
@@ -85,15 +86,6 @@ STILL_TEMP_C = 22.0
 @cache
 def _simulated(case: family.Case) -> dict[str, Any]:
     return simulate(case)
-
-
-def _rms(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(x * x)))
-
-
-def _triangles(peak: float, dt: float, period: float, cycles: int) -> np.ndarray:
-    t = np.arange(int(round(cycles * period / dt))) * dt
-    return np.asarray(peak * (0.1 + 0.8 * (1.0 - np.abs(2.0 * ((t / period) % 1.0) - 1.0))))
 
 
 def _older_seeds() -> set[int]:
@@ -194,7 +186,7 @@ def test_columns_act_only_in_their_own_effects_records(case: family.Case) -> Non
     still_temp = np.full_like(sim["temperature"], float(sim["temperature"][0]))
     for load, temp, which in ((still_load, sim["temperature"], "load"), (sim["load"], still_temp, "temperature")):
         again = render(core, params, u, dt, case.form, dict(q), load, temp)
-        change = _rms(again - sim["on"])
+        change = rms(again - sim["on"])
         if case.effect in (f"{which}_dependence", f"{which}_drift"):  # held, it is the effect-free record
             assert change == pytest.approx(truth["effect_size"]) and change >= EFFECT_MIN_OVER_NOISE * truth["noise"]
         else:
@@ -210,7 +202,7 @@ def test_effect_free_records_carry_the_rig_confounds(plant: str) -> None:
     m, truth = measurement_from(case, sim)
     params, dt = truth["plant_parameters"], 1.0 / case.rate_hz
     u = sim["command"]
-    assert 0.003 < _rms(sim["u"] - u) / params["peak"] < 0.1  # the recorded input is the muscle's, lagged
+    assert 0.003 < rms(sim["u"] - u) / params["peak"] < 0.1  # the recorded input is the muscle's, lagged
     step = np.where(np.arange(int(2.0 / dt)) * dt < 0.5, 0.0, params["peak"])
     overshoot = float(np.max(spool_valve(step, dt, params))) / params["peak"] - 1.0
     assert 0.01 < overshoot < 0.15  # the spool valve's second order
@@ -220,7 +212,7 @@ def test_effect_free_records_carry_the_rig_confounds(plant: str) -> None:
     still = stroke_reading(np.full(u.size, 10.0), u, dt, params) - 10.0
     assert float(np.max(still)) <= 0.07  # mm: vibration and crosstalk stay a few noise units
     confounds = sim["off"] - BLIND6_CORES[plant](u, dt, params)
-    assert 0.002 < _rms(confounds) < 0.05
+    assert 0.002 < rms(confounds) < 0.05
     assert 1e-5 < truth["jitter_s"] < 1.2e-4
 
 
@@ -245,7 +237,7 @@ def test_delay_forms_lag_the_effect_free_output() -> None:
 
 def test_pilot_dead_time_is_longest_for_slow_changes() -> None:
     dt, peak, q = 0.004, 4.0, {"pilot_dead_s": 0.08}
-    slow, fast = (_triangles(peak, dt, period, 2) for period in (40.0, 2.0))
+    slow, fast = (triangles(peak, dt, period, 2) for period in (40.0, 2.0))
     mid_slow, mid_fast = (
         lag[lag.size // 8 : lag.size // 4] for lag in (pilot_lag_s(x, dt, q, peak) for x in (slow, fast))
     )
@@ -285,13 +277,13 @@ def test_rate_forms_grow_with_the_input_speed(plant: str) -> None:
             temps, loads = np.full_like(u, STILL_TEMP_C), np.zeros_like(u)
             off = render(BLIND6_CORES[plant], params, u, dt, "none", q, loads, temps)
             on = render(BLIND6_CORES[plant], params, u, dt, form, q, loads, temps)
-            sizes.append(_rms(on - off))
+            sizes.append(rms(on - off))
         assert sizes[1] > 2.0 * sizes[0], (form, sizes)
 
 
 def test_one_way_damper_lags_only_the_falling_branch() -> None:
     dt, peak = 0.005, 4.0
-    u = _triangles(peak, dt, 4.0, 3)
+    u = triangles(peak, dt, 4.0, 3)
     params = draw_params("rayleigh_lambert", np.random.default_rng(7), peak)
     still = np.zeros_like(u)
     core, q = BLIND6_CORES["rayleigh_lambert"], {"damper_tau_s": 0.1}
@@ -306,7 +298,7 @@ def test_ptfe_liner_acts_through_the_loop_width() -> None:
     """Warming through the liner's transition widens the core's loop (descending minus
     ascending), not the whole curve."""
     dt, peak = 0.01, 4.0
-    u = _triangles(peak, dt, 20.0, 4)
+    u = triangles(peak, dt, 20.0, 4)
     q = {"transition_gain": 1.0, "width_19_k": 3.0, "width_30_k": 3.0, "liner_tau_s": 5.0}
     per = int(20.0 / dt)
     for plant in BLIND6_PLANTS:

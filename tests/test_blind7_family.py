@@ -84,8 +84,9 @@ from tests.plants.properties import (
     assert_effect_size_as_recorded,
     slow_and_fast_triangles,
     step_and_hold,
+    triangles,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE
+from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 60.0
 CASES = blind7_cases(DURATION_S)
@@ -95,15 +96,6 @@ STILL_TEMP_C = 22.0
 @cache
 def _simulated(case: family.Case) -> dict[str, Any]:
     return simulate(case)
-
-
-def _rms(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(x * x)))
-
-
-def _triangles(peak: float, dt: float, period: float, cycles: int) -> np.ndarray:
-    t = np.arange(int(round(cycles * period / dt))) * dt
-    return np.asarray(peak * (0.1 + 0.8 * (1.0 - np.abs(2.0 * ((t / period) % 1.0) - 1.0))))
 
 
 def _render(
@@ -217,7 +209,7 @@ def test_columns_act_only_in_their_own_effects_records(case: family.Case) -> Non
     still_temp = np.full_like(sim["temperature"], float(sim["temperature"][0]))
     for load, temp, which in ((still_load, sim["temperature"], "load"), (sim["load"], still_temp, "temperature")):
         again = render(params, u, dt, case.form, dict(q), load, temp, sim["base"])
-        change = _rms(again - sim["on"])
+        change = rms(again - sim["on"])
         if case.effect in (f"{which}_dependence", f"{which}_drift"):  # held, it is the effect-free record
             assert change == pytest.approx(truth["effect_size"]) and change >= EFFECT_MIN_OVER_NOISE * truth["noise"]
         else:
@@ -237,13 +229,13 @@ def test_effect_free_records_carry_the_rig_confounds(plant: str) -> None:
     assert 0.002 < float(np.max(np.abs(ripple))) / params["peak"] <= 0.0101  # aliased PWM ripple, in the input only
     inside = muscle_pressure(u, dt, params)  # the recorded input leads it by the hose's lag
     hosed = lowpass(valve_pressure(u, dt, {**params, "ripple_bar": 0.0}), dt, params["hose_tau_s"])
-    assert _rms(inside - sim["u"]) / params["peak"] > 0.002 and _rms(inside - hosed) < 0.5 * _rms(inside - sim["u"])
+    assert rms(inside - sim["u"]) / params["peak"] > 0.002 and rms(inside - hosed) < 0.5 * rms(inside - sim["u"])
     popcorn = popcorn_noise(u.size, dt, params)
     assert set(np.unique(popcorn)) <= {0.0, params["rtn_mm"]} and 0.004 < params["rtn_mm"] < 0.016
     skew_error = sim["off"] - sim["base"] - popcorn  # the stroke converted skew_s late: its speed times that
     speed = np.abs(np.diff(sim["base"], append=sim["base"][-1])) / dt
     assert np.all(np.abs(skew_error) <= speed * params["skew_s"] + 1e-9) and np.any(skew_error != 0.0)
-    assert 0.0005 < _rms(popcorn) < 2.0 * truth["noise"]  # popcorn: a few noise units at most
+    assert 0.0005 < rms(popcorn) < 2.0 * truth["noise"]  # popcorn: a few noise units at most
     assert np.std(m.u - sim["u"]) < 0.01  # bar: the transducer's noise and step
 
 
@@ -309,7 +301,7 @@ def test_rate_forms_grow_with_the_input_speed(plant: str) -> None:
         q = draw_effect_params("rate_dependence", form, rng)
         sizes = []
         for u in slow_and_fast_triangles(peak, dt):
-            sizes.append(_rms(_render(plant, params, u, dt, form, q) - _render(plant, params, u, dt, "none", q)))
+            sizes.append(rms(_render(plant, params, u, dt, form, q) - _render(plant, params, u, dt, "none", q)))
         assert sizes[1] > 2.0 * sizes[0], (form, sizes)
         if form == "shear_thickening_fill" and plant != "detent_carriage":  # the detent's slips are fast moves
             assert sizes[1] > 5.0 * sizes[0], sizes  # below its critical speed the fill hardly lags at all
@@ -361,7 +353,7 @@ def test_joint_slips_only_past_its_band() -> None:
 
 def test_bumper_acts_only_at_the_top_and_the_bridge_fades_when_the_temperature_settles() -> None:
     dt, peak = 0.02, 4.0
-    u = _triangles(peak, dt, 20.0, 12)
+    u = triangles(peak, dt, 20.0, 12)
     t = np.arange(u.size) * dt
     params = draw_params("twist_bearing", np.random.default_rng(9), peak)
     base = BLIND7_CORES["twist_bearing"](u, dt, params)

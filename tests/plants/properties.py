@@ -79,16 +79,18 @@ def step_and_hold(peak: float, dt: float) -> NDArray[np.float64]:
     return np.where(t < 2.0, 0.0, np.where(t < 30.0, 0.7 * peak, 0.3 * peak))
 
 
+def triangles(peak: float, dt: float, period_s: float, cycles: int) -> NDArray[np.float64]:
+    """``cycles`` triangles of ``period_s`` between 10 % and 90 % of ``peak`` [bar], sampled every ``dt``."""
+    t = np.arange(int(round(cycles * period_s / dt)), dtype=np.float64) * dt
+    return np.asarray(peak * (0.1 + 0.8 * (1.0 - np.abs(2.0 * ((t / period_s) % 1.0) - 1.0))), dtype=np.float64)
+
+
 def slow_and_fast_triangles(
     peak: float, dt: float, periods_s: tuple[float, ...] = (40.0, 4.0)
 ) -> list[NDArray[np.float64]]:
-    """Two cycles of a triangle between 10 % and 90 % of ``peak`` [bar] at each period: the same
-    loop slow and fast, for checking that a rate effect grows with the input speed."""
-    out = []
-    for period in periods_s:
-        t = np.arange(int(round(2 * period / dt)), dtype=np.float64) * dt
-        out.append(peak * (0.1 + 0.8 * (1.0 - np.abs(2.0 * ((t / period) % 1.0) - 1.0))))
-    return out
+    """Two :func:`triangles` at each period: the same loop slow and fast, for checking that a
+    rate effect grows with the input speed."""
+    return [triangles(peak, dt, period, 2) for period in periods_s]
 
 
 def assert_effect_size_as_recorded(effect: str, sim: dict[str, Any], truth: dict[str, Any]) -> None:
