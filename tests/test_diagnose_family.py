@@ -55,7 +55,7 @@ class Family:
 FAMILIES = {
     "tuning": Family(tuning_cases, measurement, 16, 35, 1, 20),
     "fresh": Family(fresh_cases, fresh_measurement, 11, 40, 1, 20),
-    "blind": Family(blind_cases, blind_measurement, 12, 40, 0, 20),
+    "blind": Family(blind_cases, blind_measurement, 13, 40, 0, 20),
     "blind2": Family(blind2_cases, blind2_measurement, 15, 40, 1, 20),
     "blind3": Family(blind3_cases, blind3_measurement, 8, 40, 0, 20),
     "blind4": Family(blind4_cases, blind4_measurement, 10, 40, 0, 20),
