@@ -329,21 +329,32 @@ def test_the_velocity_squared_lag_trails_a_ramp_by_alpha_v_squared():
 
 @pytest.mark.parametrize(("rise_s", "fall_s"), [(0.2, 0.0), (0.05, 0.3), (0.1, 0.1)])
 def test_a_direction_dependent_dead_time_delays_each_direction_by_its_own_time(rise_s, fall_s):
-    """A trapezoid: the rise arrives rise_s late, the fall fall_s late; nothing overtakes."""
+    """A trapezoid: the rise arrives rise_s late, the fall fall_s late (first sample past half way)."""
     from host.diagnose.features import direction_delayed
 
     dt = 0.01
     u = np.r_[np.zeros(100), np.linspace(0.0, 1.0, 101), np.ones(100), np.linspace(1.0, 0.0, 101), np.zeros(200)]
     out = direction_delayed(u, dt, rise_s, fall_s)
 
-    def half_way(x: np.ndarray, rising: bool) -> float:  # s, by interpolation
+    def half_way(x: np.ndarray, rising: bool) -> float:  # s
         segment = slice(0, 250) if rising else slice(250, None)
         k = np.flatnonzero((x[segment] >= 0.5) if rising else (x[segment] <= 0.5))[0] + segment.indices(u.size)[0]
         return k * dt
 
     assert half_way(out, True) - half_way(u, True) == pytest.approx(rise_s, abs=0.02)
     assert half_way(out, False) - half_way(u, False) == pytest.approx(fall_s, abs=0.02)
-    assert out.max() <= 1.0 and out.min() >= 0.0  # only values that were sent
+
+
+@pytest.mark.xfail(
+    strict=True, reason="known (v10): a hold counts as falling, so a rise after it waits for the hold's late samples"
+)
+def test_a_rise_after_a_hold_starts_after_the_rise_dead_time():
+    from host.diagnose.features import direction_delayed
+
+    dt = 0.01
+    u = np.r_[np.zeros(100), np.linspace(0.0, 1.0, 101)]
+    out = direction_delayed(u, dt, 0.05, 0.3)
+    assert np.flatnonzero(out > 0.0)[0] == pytest.approx(np.flatnonzero(u > 0.0)[0] + 5, abs=2)
 
 
 def test_a_column_term_is_judged_only_inside_the_columns_training_range():

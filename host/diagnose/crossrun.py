@@ -189,7 +189,10 @@ def cross_run(
         train_notes.append(input_lead_note(ctx.lag_s))
     model = fit_baseline(ctx)
     train_rmse = rmse(model.prediction, ctx.y)
-    grid = EverettGrid(float(train.u.min()), float(train.u.max()), levels)
+    # the grid the training rows were built on: the range of the input after the actuator lag
+    # (an input lead widens it, a lag narrows it), so each test row meets its trained cell mass
+    driven = actuator_input(train.u, train.dt, ctx.lag_s)
+    grid = EverettGrid(float(driven.min()), float(driven.max()), levels)
     results = []
     for raw in tests:
         test, notes = _on_grid_of(decimated(raw)[0], train.dt)
@@ -203,7 +206,8 @@ def cross_run(
         sl = slice(start.index, None)
         y, u = test.y[sl], test.u[sl]
         yhat = simulate(model, rows, float(y[0]))
-        outside = float(np.mean((u < grid.lo) | (u > grid.hi)))
+        driving = lagged_u[sl]
+        outside = float(np.mean((driving < grid.lo) | (driving > grid.hi)))
         if outside > 0:
             notes.append(f"{outside:.1%} of the test input lies outside the training range; the model saturates there")
         if start.index > 0:

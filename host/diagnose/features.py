@@ -64,7 +64,10 @@ def direction_delayed(u: NDArray[np.float64], dt: float, rise_s: float, fall_s: 
     """``u`` through a dead time that depends on where it is going [s]: a value sent while the
     input rises arrives ``rise_s`` later, one sent while it falls ``fall_s`` later (a valve that
     opens late and exhausts early, or the reverse). Nothing overtakes what was sent before it:
-    a value that would arrive earlier waits for its predecessor."""
+    a value that would arrive earlier waits for its predecessor. A hold (zero rate) counts as
+    falling, so with ``rise_s < fall_s`` a rise after a hold waits for the hold's late values
+    (a known defect, tests/test_diagnose.py). The arrival times are kept strictly increasing
+    by 1e-9 samples a step, exact for records under ~4 million samples."""
     index = np.arange(u.size, dtype=np.float64)
     rising = smoothed_rate(u, dt) > 0
     arrival = np.maximum.accumulate(index + np.where(rising, rise_s, fall_s) / dt)

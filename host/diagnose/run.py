@@ -276,8 +276,9 @@ def input_lead_note(lag_s: float) -> str:
     """What a negative actuator lag says about the rig."""
     return (
         f"the output leads the recorded input: the baseline reads the input through the inverse of a "
-        f"{-lag_s * 1e3:g} ms lag (a snubber or a filter on the pressure transducer, a channel sampled late); "
-        "a faster pressure reading at the muscle's port removes it"
+        f"{-lag_s * 1e3:g} ms lag (a snubber or a filter on the pressure transducer; or an effect that makes "
+        "the output lead, such as a term in du/dt, which this reading absorbs); a faster pressure reading at "
+        "the muscle's port tells the two apart"
     )
 
 
@@ -621,7 +622,8 @@ TERMS = {
     "speed, form 1)",
     "creep": "creep spectrum: first-order relaxations of the hysteresis output at 1-64 s, shares of one sign, "
     "y gets sum e_i*(lowpass(x, tau_i) - x)",
-    "transport_delay": "dead time before the hysteresis: x(k - d)",
+    "transport_delay": "dead time before the hysteresis: x(k - d), or x(k - d_rise) while the input rises and "
+    "x(k - d_fall) while it falls",
     "load_dependence": "load terms: y gets e1*L + e2*L*x + e3*L*x^2 (curve) + e4*L*branch (loop width) + e5*L^2",
     "temperature_drift": "temperature terms: y gets e1*T + e2*T*x + e3*T*x^2 (curve) + e4*T*branch (loop width) "
     "+ e5*T^2, and f1*Tlag + f2*Tlag*x for T after a 10 s thermal lag",
@@ -637,7 +639,9 @@ def _describe(model: FittedModel, ctx: Context) -> dict[str, object]:
     coefficients = model.exogenous[model.nb : model.nb + n_extra] if n_extra else np.zeros(0)
     return {
         "name": model.name,
-        "structure": "actuator lag + Preisach hysteresis + ARX(na, nb) + " + TERMS[model.name],
+        "structure": ("actuator lag" if ctx.lag_s >= 0 else "inverse input lag")
+        + " + Preisach hysteresis + ARX(na, nb) + "
+        + TERMS[model.name],
         "actuator_lag_s": ctx.lag_s,
         "na": model.na,
         "nb": model.nb,
