@@ -9,7 +9,8 @@ jointly with its term; a fold then refits only the gains and the term's coeffici
   ``branch * r`` and ``x * r``, ``r`` the input speed over its 95th percentile);
 * ``creep``: a creep spectrum, first-order relaxations of the hysteresis output at 1-64 s whose
   shares all have one sign (:func:`creep`);
-* ``transport_delay``: a dead time before the hysteresis (at least 3 samples);
+* ``transport_delay``: a dead time before the hysteresis (at least 3 samples), or one that
+  differs between rising and falling input (:func:`direction_dependent_delay`);
 * ``load_dependence`` / ``temperature_drift``: the measured column shifts and bends the curve
   and widens or narrows the loop, and acts through a curved map of itself
   (``v, v x, v x^2, v branch, v^2``); temperature also through the column after a 10 s thermal
