@@ -149,6 +149,12 @@ def _best_of(values: Sequence[float], design_for: Callable[[float, int], Design]
     return design_for(values[int(np.argmin(errors))], FULL_ITERATIONS)
 
 
+def _better_on_record(ctx: Context, forms: Sequence[Design]) -> Design:
+    """The form of one cause with the lowest whole-record RMSE (each fitted on every row)."""
+    every = np.ones(ctx.y.size, dtype=bool)
+    return min(forms, key=lambda d: _training_error(d.fit(ctx, every), ctx))
+
+
 def _normalised(values: NDArray[np.float64]) -> NDArray[np.float64]:
     v = values - values.mean()
     return v / (float(np.std(v)) or 1.0)
@@ -218,9 +224,7 @@ def _rate_weight(ctx: Context) -> Design:
 def rate_dependence(ctx: Context) -> Design:
     """The better form (whole-record RMSE) of velocity-squared friction and a rate-dependent weight."""
     friction = _best_of(FRICTION_DEFLECTIONS, partial(_friction, ctx), ctx)
-    weight = _rate_weight(ctx)
-    every = np.ones(ctx.y.size, dtype=bool)
-    return min((friction, weight), key=lambda d: _training_error(d.fit(ctx, every), ctx))
+    return _better_on_record(ctx, (friction, _rate_weight(ctx)))
 
 
 OUTPUT_LAGS_S = (0.01, 0.02, 0.05, 0.1, 0.2)
@@ -268,9 +272,7 @@ def creep(ctx: Context) -> Design:
     shares have mixed signs makes a band-pass out of relaxations, which fits some other error
     (a lag, an overshoot of the mechanics); so each sign is fitted on its own and the one with
     the lower whole-record error is kept."""
-    every = np.ones(ctx.y.size, dtype=bool)
-    fits = [_creep_spectrum(ctx, sign) for sign in (1.0, -1.0)]
-    return min(fits, key=lambda d: _training_error(d.fit(ctx, every), ctx))
+    return _better_on_record(ctx, [_creep_spectrum(ctx, sign) for sign in (1.0, -1.0)])
 
 
 def transport_delay(ctx: Context) -> Design | None:
@@ -303,10 +305,7 @@ def transport_delay(ctx: Context) -> Design | None:
 
     one = _best_of([float(i) for i in range(len(pairs))], design, ctx)
     two = direction_dependent_delay(ctx, one.extra["dead_time_s"], one.extra["actuator_lag_with_dead_time_s"])
-    if two is None:
-        return one
-    every = np.ones(ctx.y.size, dtype=bool)
-    return min((one, two), key=lambda d: _training_error(d.fit(ctx, every), ctx))
+    return one if two is None else _better_on_record(ctx, (one, two))
 
 
 def usable_delays(ctx: Context) -> list[float]:
@@ -314,7 +313,12 @@ def usable_delays(ctx: Context) -> list[float]:
     samples (a shift of one or two samples is within what the model's own resolution, the Everett
     grid and the rate smoothing, produces on a plant without any delay) and at most a tenth of
     the record."""
-    return [d for d in DELAYS_S if MIN_DELAY_SAMPLES * ctx.dt <= d <= 0.1 * ctx.y.size * ctx.dt]
+    return [d for d in DELAYS_S if MIN_DELAY_SAMPLES * ctx.dt <= d <= _longest_delay(ctx)]
+
+
+def _longest_delay(ctx: Context) -> float:
+    """The longest dead time a record can be judged on [s]: a tenth of it."""
+    return 0.1 * ctx.y.size * ctx.dt
 
 
 # the other direction's dead time, as a share of the one found for both
@@ -328,8 +332,8 @@ def direction_dependent_delay(ctx: Context, delay_s: float, lag_s: float) -> Des
     line that fills slower than it vents. None when the input's history is not available."""
     if ctx.rows_after is None:
         return None
-    rows_after, longest = ctx.rows_after, 0.1 * ctx.y.size * ctx.dt
-    others = [share * delay_s for share in OTHER_DIRECTION_SHARES if share * delay_s <= longest]
+    rows_after = ctx.rows_after
+    others = [share * delay_s for share in OTHER_DIRECTION_SHARES if share * delay_s <= _longest_delay(ctx)]
     pairs = [(delay_s, other) for other in others] + [(other, delay_s) for other in others]
 
     def design(index: float, iterations: int) -> Design:
