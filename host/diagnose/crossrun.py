@@ -43,8 +43,8 @@ from host.diagnose.run import (
     PREISACH_LEVELS,
     choose_actuator_lag,
     fit_baseline,
-    input_lead_note,
     known_memory,
+    lead_notes,
     prepare,
     samples_needed,
 )
@@ -185,8 +185,7 @@ def cross_run(
     train, _ = decimated(train)
     ctx, _, train_notes = prepare(train, levels)
     ctx.lag_s = choose_actuator_lag(ctx)
-    if ctx.lag_s < 0:
-        train_notes.append(input_lead_note(ctx.lag_s))
+    train_notes += lead_notes(ctx.lag_s)
     model = fit_baseline(ctx)
     train_rmse = rmse(model.prediction, ctx.y)
     # the grid the training rows were built on: the range of the input after the actuator lag

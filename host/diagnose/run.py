@@ -240,7 +240,8 @@ def prepare(
     start, notes = known_memory(m.u, m.source, assume_state, needed)
     sl = slice(start.index, None)
     extras = {k: v[sl] for k, v in m.extras.items() if k in ("load", "temperature")}
-    lag_rows = {lag: preisach_rows(actuator_input(m.u, m.dt, lag), start, levels) for lag in actuator_lags(m.dt)}
+    rows_after = partial(rows_after_filter, m.u, start, levels)
+    lag_rows = {lag: rows_after(partial(actuator_input, dt=m.dt, lag_s=lag)) for lag in actuator_lags(m.dt)}
     ctx = Context(
         m.t[sl],
         m.u[sl],
@@ -251,7 +252,7 @@ def prepare(
         extras,
         m.dt,
         output_rate=smoothed_rate(m.y, m.dt)[sl],
-        rows_after=partial(rows_after_filter, m.u, start, levels),
+        rows_after=rows_after,
     )
     return ctx, start.index, notes
 
@@ -272,14 +273,16 @@ def actuator_lags(dt: float) -> list[float]:
     return [lag for lag in ACTUATOR_LAGS_S if lag >= 0 or -lag >= 0.5 * dt]
 
 
-def input_lead_note(lag_s: float) -> str:
-    """What a negative actuator lag says about the rig."""
-    return (
+def lead_notes(lag_s: float) -> list[str]:
+    """What a negative actuator lag says about the rig (nothing for a lag)."""
+    if lag_s >= 0:
+        return []
+    return [
         f"the output leads the recorded input: the baseline reads the input through the inverse of a "
         f"{-lag_s * 1e3:g} ms lag (a snubber or a filter on the pressure transducer; or an effect that makes "
         "the output lead, such as a term in du/dt, which this reading absorbs); a faster pressure reading at "
         "the muscle's port tells the two apart"
-    )
+    ]
 
 
 def choose_actuator_lag(ctx: Context) -> float:
@@ -467,8 +470,7 @@ def _diagnose(
     masks = holdout_masks(n, folds, blocks_per_fold)
     with _progress(2 + len(CAUSES), progress) as bar:
         ctx.lag_s = choose_actuator_lag(ctx)
-        if ctx.lag_s < 0:
-            notes.append(input_lead_note(ctx.lag_s))
+        notes += lead_notes(ctx.lag_s)
         baseline_full = fit_baseline(ctx)
         found = signatures(
             ctx.y - baseline_full.prediction,
