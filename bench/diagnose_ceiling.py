@@ -48,28 +48,20 @@ from host.diagnose.candidates import baseline, with_columns  # noqa: E402
 from host.diagnose.decide import against_baseline, floor_for  # noqa: E402
 from host.diagnose.folds import BLOCKS_PER_FOLD, holdout_masks, noise_floor  # noqa: E402
 from host.diagnose.run import diagnose, finite_or_null, held_out_score  # noqa: E402
+from tests.plants.families import FAMILIES  # noqa: E402
 from tests.plants.family import Case  # noqa: E402
 
 FOLDS = 4
-# family -> (module, function that lists its cases); each module has simulate() and measurement_from()
-SETS = {
-    "fresh": ("tests.plants.fresh_family", "fresh_cases"),
-    "blind": ("tests.plants.blind_family", "blind_cases"),
-    "blind2": ("tests.plants.blind2_family", "blind2_cases"),
-    "blind3": ("tests.plants.blind3_family", "blind3_cases"),
-    "blind4": ("tests.plants.blind4_family", "blind4_cases"),
-    "blind5": ("tests.plants.blind5_family", "blind5_cases"),
-    "blind6": ("tests.plants.blind6_family", "blind6_cases"),
-    "blind7": ("tests.plants.blind7_family", "blind7_cases"),
-}
+# family -> the function that lists its cases; each family's module has simulate() and measurement_from()
+SETS = {name: cases for name, (cases, _record) in FAMILIES.items() if name != "tuning"}
 
 
 def oracle(set_name: str, case: Case) -> dict[str, Any]:
     """The diagnosis of ``case`` and its oracle's held-out score (see the module docstring)."""
-    family = importlib.import_module(SETS[set_name][0])
+    family = importlib.import_module(SETS[set_name].__module__)
     sim = family.simulate(case)
     if "on" not in sim or "off" not in sim:
-        raise SystemExit(f"{SETS[set_name][0]}.simulate gives no 'on'/'off' outputs; the ceiling needs both")
+        raise SystemExit(f"{family.__name__}.simulate gives no 'on'/'off' outputs; the ceiling needs both")
     m, _truth = family.measurement_from(case, sim)
     waveform = np.asarray(sim["on"] - sim["off"], dtype=np.float64)
     row: dict[str, Any] = {"set": set_name, "case": case.name, "plant": case.plant, "effect": case.effect}
@@ -150,8 +142,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"unknown set {', '.join(unknown)}; known: {', '.join(SETS)}")
     jobs: list[tuple[str, Case]] = []
     for s in sets:
-        family = importlib.import_module(SETS[s][0])
-        cases = getattr(family, SETS[s][1])(args.duration)
+        cases = SETS[s](args.duration)
         jobs += [(s, c) for c in cases if c.effect != "none" and (not args.only or args.only in c.name)]
     rows: list[dict[str, Any]] = []
     with Pool(max(1, args.workers)) as pool:

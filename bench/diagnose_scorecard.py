@@ -40,27 +40,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from edge.errors import DataError  # noqa: E402
 from host.data import Measurement  # noqa: E402
 from host.diagnose.run import diagnose  # noqa: E402
-from tests.plants.blind2_family import blind2_cases, blind2_measurement  # noqa: E402
-from tests.plants.blind3_family import blind3_cases, blind3_measurement  # noqa: E402
-from tests.plants.blind4_family import blind4_cases, blind4_measurement  # noqa: E402
-from tests.plants.blind5_family import blind5_cases, blind5_measurement  # noqa: E402
-from tests.plants.blind6_family import blind6_cases, blind6_measurement  # noqa: E402
-from tests.plants.blind7_family import blind7_cases, blind7_measurement  # noqa: E402
-from tests.plants.blind_family import blind_cases, blind_measurement  # noqa: E402
-from tests.plants.family import Case, measurement, tuning_cases  # noqa: E402
-from tests.plants.fresh_family import fresh_cases, fresh_measurement  # noqa: E402
+from tests.plants.families import FAMILIES  # noqa: E402
+from tests.plants.family import Case  # noqa: E402
 
-SETS = {
-    "tuning": (tuning_cases, measurement),
-    "fresh": (fresh_cases, fresh_measurement),
-    "blind": (blind_cases, blind_measurement),
-    "blind2": (blind2_cases, blind2_measurement),
-    "blind3": (blind3_cases, blind3_measurement),
-    "blind4": (blind4_cases, blind4_measurement),
-    "blind5": (blind5_cases, blind5_measurement),
-    "blind6": (blind6_cases, blind6_measurement),
-    "blind7": (blind7_cases, blind7_measurement),
-}
+SETS = FAMILIES
 
 
 def diagnosed(m: Measurement, assume_state: bool = True) -> dict[str, object]:

@@ -20,31 +20,20 @@ effect-free records. ``python bench/diagnose_scorecard.py`` prints the same tabl
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import pytest
 
-from host.data import Measurement
 from host.diagnose.run import diagnose
-from tests.plants.blind2_family import blind2_cases, blind2_measurement
-from tests.plants.blind3_family import blind3_cases, blind3_measurement
-from tests.plants.blind4_family import blind4_cases, blind4_measurement
-from tests.plants.blind5_family import blind5_cases, blind5_measurement
-from tests.plants.blind6_family import blind6_cases, blind6_measurement
-from tests.plants.blind7_family import blind7_cases, blind7_measurement
-from tests.plants.blind_family import blind_cases, blind_measurement
-from tests.plants.family import Case, measurement, tuning_cases
-from tests.plants.fresh_family import fresh_cases, fresh_measurement
-
-Record = Callable[[Case], tuple[Measurement, dict[str, object]]]
+from tests.plants.families import FAMILIES as REGISTRY
+from tests.plants.families import Cases, Record
 
 
 @dataclass(frozen=True)
 class Family:
     """A plant family and its measured scorecard (``bench/diagnose_scorecard.py --duration 100``)."""
 
-    cases: Callable[[float], list[Case]]
+    cases: Cases
     record: Record
     named: int
     effects: int
@@ -52,17 +41,19 @@ class Family:
     effect_free: int
 
 
-FAMILIES = {
-    "tuning": Family(tuning_cases, measurement, 16, 35, 1, 20),
-    "fresh": Family(fresh_cases, fresh_measurement, 11, 40, 1, 20),
-    "blind": Family(blind_cases, blind_measurement, 13, 40, 0, 20),
-    "blind2": Family(blind2_cases, blind2_measurement, 15, 40, 1, 20),
-    "blind3": Family(blind3_cases, blind3_measurement, 8, 40, 0, 20),
-    "blind4": Family(blind4_cases, blind4_measurement, 10, 40, 0, 20),
-    "blind5": Family(blind5_cases, blind5_measurement, 13, 40, 0, 20),
-    "blind6": Family(blind6_cases, blind6_measurement, 14, 40, 0, 20),
-    "blind7": Family(blind7_cases, blind7_measurement, 11, 40, 1, 20),
+# the recorded scorecards (named, effects, false alarms, effect-free records) of each family
+SCORECARDS = {
+    "tuning": (16, 35, 1, 20),
+    "fresh": (11, 40, 1, 20),
+    "blind": (13, 40, 0, 20),
+    "blind2": (15, 40, 1, 20),
+    "blind3": (8, 40, 0, 20),
+    "blind4": (10, 40, 0, 20),
+    "blind5": (13, 40, 0, 20),
+    "blind6": (14, 40, 0, 20),
+    "blind7": (11, 40, 1, 20),
 }
+FAMILIES = {name: Family(*REGISTRY[name], *scorecard) for name, scorecard in SCORECARDS.items()}
 HELD_OUT = [name for name in FAMILIES if name != "tuning"]
 _VERDICTS: dict[str, list[tuple[str, str]]] = {}
 

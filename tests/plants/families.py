@@ -1,0 +1,36 @@
+"""Every plant family the diagnosis is scored on, by name: how to list its cases and record one.
+
+One registry for ``bench/diagnose_scorecard.py``, ``bench/diagnose_ceiling.py`` and the slow
+family test (``tests/test_diagnose_family.py``), so a new family is added in one place.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from host.data import Measurement
+from tests.plants.blind2_family import blind2_cases, blind2_measurement
+from tests.plants.blind3_family import blind3_cases, blind3_measurement
+from tests.plants.blind4_family import blind4_cases, blind4_measurement
+from tests.plants.blind5_family import blind5_cases, blind5_measurement
+from tests.plants.blind6_family import blind6_cases, blind6_measurement
+from tests.plants.blind7_family import blind7_cases, blind7_measurement
+from tests.plants.blind_family import blind_cases, blind_measurement
+from tests.plants.family import Case, measurement, tuning_cases
+from tests.plants.fresh_family import fresh_cases, fresh_measurement
+
+Cases = Callable[[float], list[Case]]  # a family's cases for a record duration [s]
+Record = Callable[[Case], tuple[Measurement, dict[str, Any]]]  # a case's recording and its truth
+
+FAMILIES: dict[str, tuple[Cases, Record]] = {
+    "tuning": (tuning_cases, measurement),
+    "fresh": (fresh_cases, fresh_measurement),
+    "blind": (blind_cases, blind_measurement),
+    "blind2": (blind2_cases, blind2_measurement),
+    "blind3": (blind3_cases, blind3_measurement),
+    "blind4": (blind4_cases, blind4_measurement),
+    "blind5": (blind5_cases, blind5_measurement),
+    "blind6": (blind6_cases, blind6_measurement),
+    "blind7": (blind7_cases, blind7_measurement),
+}
