@@ -117,6 +117,39 @@ def test_a_reader_never_sees_a_half_written_bundle_during_re_saves(tmp_path):
     assert loads >= 10 and failures == 0
 
 
+def test_a_release_pruned_while_it_is_read_is_followed_to_the_new_current(tmp_path, monkeypatch):
+    """The race the reader above hits by chance, made certain: two re-saves prune the release a
+    load resolved, between its checksums and its table reads."""
+    import edge.runtime.bundle as loader
+
+    directory = save(tmp_path / "b", seed=0)
+    first = resolve_release(directory)
+    real_read_table, calls = loader.read_table, []
+
+    def read_table_after_two_re_saves(path):
+        if not calls:
+            save(directory, seed=1, keep=2)
+            save(directory, seed=2, keep=2)
+            assert not first.exists()  # pruned: neither current nor previous any more
+        calls.append(path)
+        return real_read_table(path)
+
+    monkeypatch.setattr(loader, "read_table", read_table_after_two_re_saves)
+    bundle = load_bundle(directory)
+    assert bundle.path == resolve_release(directory) != first
+    assert calls[0].parent == first
+
+
+def test_a_broken_current_release_is_reported_at_once_not_retried(tmp_path, monkeypatch):
+    import edge.runtime.bundle as loader
+
+    directory = save(tmp_path / "b")
+    (resolve_release(directory) / "forward.npz").unlink()
+    monkeypatch.setattr(loader.time, "sleep", lambda s: pytest.fail("retried a bundle nobody rewrites"))
+    with pytest.raises(BundleError, match="forward.npz listed in the manifest is missing; re-copy"):
+        load_bundle(directory)
+
+
 # -- paths, roles, malformed manifests ----------------------------------------------------------
 
 

@@ -144,19 +144,26 @@ def load_release(directory: str | Path, trusted: Sequence[tuple[str, bytes]] | N
         release = resolve_release(directory)
         try:
             return _load(release, trusted)
-        except _Vanished as exc:
-            if not via_current or attempt == LOAD_ATTEMPTS - 1:
+        except BundleError:
+            # A re-save prunes releases that are neither current nor previous, so a reader slowed
+            # by a busy machine can lose the release it resolved, file by file (rmtree) or whole.
+            # Any error on a release `current` no longer names is that race, not a broken bundle.
+            if not via_current or not _superseded(directory, release):
+                raise
+            if attempt == LOAD_ATTEMPTS - 1:
                 raise BundleError(
-                    f"{release}: files vanished while loading; the bundle is being rewritten, retry"
-                ) from exc
-        # re-saves in quick succession pruned the release under a reader slowed by a busy machine
-        # (three immediate retries lost 1 of 66 loads in CI): back off, then follow `current` again
+                    f"{directory}: rewritten {LOAD_ATTEMPTS} times while loading; stop the re-saves, then retry"
+                ) from None
         time.sleep(min(0.05, 0.001 * 2**attempt))
     raise AssertionError("unreachable")
 
 
-class _Vanished(Exception):
-    """The release went away between resolving ``current`` and reading it (pruned by a re-save)."""
+def _superseded(directory: str | Path, release: Path) -> bool:
+    """True when ``directory``'s ``current`` no longer names ``release`` (or names nothing)."""
+    try:
+        return resolve_release(directory) != release
+    except BundleError:
+        return True
 
 
 def _load(release: Path, trusted: Sequence[tuple[str, bytes]] | None) -> Bundle:
@@ -202,8 +209,6 @@ def _read_plain(release: Path, name: str) -> bytes:
             raise BundleError(f"{release / name}: not a plain file (a link or a device); re-export the bundle")
         return (release / name).read_bytes()
     except FileNotFoundError as exc:
-        if not release.exists():
-            raise _Vanished() from exc
         raise BundleError(f"{release}: no {name}; point at a directory written by pmactl fit --save") from exc
     except OSError as exc:
         raise BundleError(f"{release / name}: unreadable ({exc}); check the permissions or re-copy") from exc
@@ -212,8 +217,8 @@ def _read_plain(release: Path, name: str) -> bytes:
 def _sha256_plain(release: Path, name: str) -> str:
     try:
         return sha256_file(release / name)
-    except FileNotFoundError as exc:
-        raise _Vanished() from exc
+    except OSError as exc:
+        raise BundleError(f"{release / name}: unreadable ({exc}); re-copy the bundle") from exc
 
 
 def _parse_manifest(manifest_path: Path, raw: bytes) -> dict[str, object]:
@@ -253,8 +258,6 @@ def _confined(release: Path, name: object, manifest_path: Path) -> Path:
     try:
         mode = os.lstat(path).st_mode
     except FileNotFoundError as exc:
-        if not release.exists():
-            raise _Vanished() from exc
         raise BundleError(f"{release}: file {name} listed in the manifest is missing; re-copy the bundle") from exc
     if not stat.S_ISREG(mode):
         kind = "a symbolic link" if stat.S_ISLNK(mode) else "not a plain file"
