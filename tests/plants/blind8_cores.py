@@ -325,7 +325,7 @@ def draw_params(core: str, rng: np.random.Generator, peak: float) -> dict[str, f
         k = (top - weight) / stroke
         g.update(weight_n=weight, k_spring_n_mm=k, k_total_n_mm=2.0 * k)
         g.update(
-            dp_bound=rng.uniform(0.045, 0.075), dp_elastic=rng.uniform(15.0, 40.0), dp_hardening=rng.uniform(2.0, 8.0)
+            dp_bound=rng.uniform(0.06, 0.09), dp_elastic=rng.uniform(15.0, 40.0), dp_hardening=rng.uniform(2.0, 8.0)
         )
         return g
     if core == "mindlin_crossings":

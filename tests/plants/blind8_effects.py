@@ -17,18 +17,19 @@ filter (a near-constant group delay of 12-50 ms); the stroke sensor streams its 
 queued behind the one on the wire and taking ``10 chars / baud``, the logger holding the last
 complete frame). Load dependence: the muscle's top anchor sits on a stack of *Belleville
 disc springs* (Almen-Laszlo, degressive) that the line's tension (payload plus return spring)
-compresses; the muscle pulls its payload through a *Bowden cable whose sheath compresses* (its
-coil gaps close first, softly, then the solid sheath). Temperature drift: the rubber return
+compresses (sized so that the working pull sits near the discs' flat, constant-force region);
+the muscle pulls its payload through a *Bowden cable whose sheath compresses* (its
+coil gaps close first, softly, then the solid sheath) under the payload's weight. Temperature drift: the rubber return
 cord's *thermoelastic inversion* (entropic force ``~ T`` against thermal expansion: it weakens
 when warm at small stretch and strengthens at large stretch), through the cord's thermal lag;
 the draw-wire stroke sensor's plastic *drum expanding* (the reading of the whole extension, its
 dead length included, scales by ``1 / (1 + alpha dT)``), through the drum's lag.
 
 Load [kg] and temperature [degC] columns always move; when they are not the effect they are
-decoys. Load: a hoist paying a chain out onto the payload's pan and taking it up again, or a
-mass on a spring hanger plucked now and then (a decaying oscillation on the load cell).
+decoys. Load: a hoist paying a chain out onto the payload's pan and taking it up again, or masses
+set on and taken off a pan on a spring hanger (each change ringing on the load cell).
 Temperature: the muscle's exhaust blowing over the sensor at every vent (a decoy following the
-input's falls), or an oscillating desk fan sweeping over the warm rig.
+input's falls), or an oscillating desk fan switched on and off, sweeping over the warm rig.
 """
 
 from __future__ import annotations
@@ -86,19 +87,23 @@ def load_hoist_chain(t: Array, rng: np.random.Generator) -> Array:
     return np.asarray(float(rng.uniform(0.5, 2.0)) + np.interp(t, knots_t, knots_f), dtype=np.float64)
 
 
-def load_plucked_hanger(t: Array, rng: np.random.Generator) -> Array:
-    """A 1-4 kg mass on a spring hanger plucked every 5-15 s (first within 4 s): the load cell
-    reads a decaying oscillation of 0.2-0.6 kg at 1.5-3 Hz (damping ratio 0.03-0.08)."""
+def load_spring_hanger_masses(t: Array, rng: np.random.Generator) -> Array:
+    """A 1-3 kg pan on a spring hanger onto which masses of 0.3-1 kg are set or taken off every
+    6-15 s (first within 4 s; never below the pan): each change rings on the load cell as a
+    decaying oscillation of the change's size at 1.5-3 Hz (damping ratio 0.03-0.08)."""
     f, zeta = float(rng.uniform(1.5, 3.0)), float(rng.uniform(0.03, 0.08))
-    load = np.full_like(t, float(rng.uniform(1.0, 4.0)))
-    now = float(rng.uniform(0.0, 4.0))
+    w = 2.0 * math.pi * f
+    pan = float(rng.uniform(1.0, 3.0))
+    load = np.full_like(t, pan)
+    on, now = 0.0, float(rng.uniform(0.0, 4.0))
     while now < t[-1]:
+        change = float(rng.uniform(0.3, 1.0))
+        change = -change if on >= change and rng.uniform() < 0.5 else change
+        on += change
         s = t - now
         after = s >= 0.0
-        amp = float(rng.uniform(0.2, 0.6))
-        w = 2.0 * math.pi * f
-        load[after] += amp * np.exp(-zeta * w * s[after]) * np.sin(w * s[after])
-        now += float(rng.uniform(5.0, 15.0))
+        load[after] += change * (1.0 - np.exp(-zeta * w * s[after]) * np.cos(w * s[after]))
+        now += float(rng.uniform(6.0, 15.0))
     return load
 
 
@@ -118,27 +123,27 @@ def temp_exhaust_cooling(t: Array, rng: np.random.Generator, v: Array) -> Array:
 
 
 def temp_fan_sweep(t: Array, rng: np.random.Generator) -> Array:
-    """A rig 3-7 K above a 20-26 degC room, an oscillating fan sweeping over it every 8-16 s
-    (cooling pulses ``depth max(0, cos)^4``, depth 2-4 K), the setting (period, depth)
-    changed every 30-60 s, read through the sensor's 1.5-4 s lag."""
+    """A rig 3-7 K above a 20-26 degC room and an oscillating desk fan switched on and off every
+    15-40 s (first within 10 s): while on, the rig cools towards 1.5-4 K lower (lag 8-20 s) and
+    every sweep over it (every 8-16 s) adds a cooling pulse ``depth max(0, cos)^4`` (depth
+    0.5-1.5 K); read through the sensor's 1.5-4 s lag."""
     dt = float(t[1] - t[0])
     base = float(rng.uniform(20.0, 26.0)) + float(rng.uniform(3.0, 7.0))
-    out = np.empty_like(t)
-    start = 0.0
-    while start < t[-1] + dt:
-        length, period, depth = (
-            float(rng.uniform(30.0, 60.0)),
-            float(rng.uniform(8.0, 16.0)),
-            float(rng.uniform(2.0, 4.0)),
-        )
-        inside = (t >= start) & (t < start + length)
-        phase = 2.0 * np.pi * (t[inside] - start) / period + float(rng.uniform(0.0, 6.3))
-        out[inside] = base - depth * np.clip(np.cos(phase), 0.0, None) ** 4
-        start += length
-    return lowpass(out, dt, float(rng.uniform(1.5, 4.0)))
+    fan = np.zeros_like(t)
+    on, now = bool(rng.uniform() < 0.5), float(rng.uniform(0.0, 10.0))
+    fan[t < now] = float(on)
+    while now < t[-1]:
+        on = not on
+        length = float(rng.uniform(15.0, 40.0))
+        fan[(t >= now) & (t < now + length)] = float(on)
+        now += length
+    period, depth = float(rng.uniform(8.0, 16.0)), float(rng.uniform(0.5, 1.5))
+    sweep = depth * np.clip(np.cos(2.0 * np.pi * t / period + float(rng.uniform(0.0, 6.3))), 0.0, None) ** 4
+    cooled = lowpass(fan * float(rng.uniform(1.5, 4.0)), dt, float(rng.uniform(8.0, 20.0)))
+    return lowpass(base - cooled - fan * sweep, dt, float(rng.uniform(1.5, 4.0)))
 
 
-LOAD_PATTERNS = {"hoist_chain": load_hoist_chain, "plucked_hanger": load_plucked_hanger}
+LOAD_PATTERNS = {"hoist_chain": load_hoist_chain, "spring_hanger_masses": load_spring_hanger_masses}
 TEMPERATURE_PATTERNS = ("exhaust_cooling", "fan_sweep")
 
 
@@ -186,14 +191,15 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
     if form == "belleville_anchor":  # stack thickness [mm]; cone height / thickness; flat force / line force
         return {
             "stack_mm": rng.uniform(1.0, 4.0),
-            "cone_ratio": rng.uniform(0.5, 1.2),
-            "flat_over_line": rng.uniform(1.5, 3.0),
+            "cone_ratio": rng.uniform(1.0, 1.35),
+            "flat_over_line": rng.uniform(0.9, 1.3),
         }
-    if form == "bowden_sheath_compression":  # coil gaps [mm]; gap force / line force; solid [mm/N]
+    if form == "bowden_sheath_compression":  # coil gaps [mm]; gap force / payload's; solid [mm/N]; preload [N]
         return {
             "gap_mm": rng.uniform(0.3, 1.5),
-            "gap_over_line": rng.uniform(0.5, 1.5),
-            "solid_mm_per_n": rng.uniform(0.001, 0.004),
+            "gap_over_line": rng.uniform(0.3, 1.0),
+            "solid_mm_per_n": rng.uniform(0.002, 0.006),
+            "cable_preload_n": rng.uniform(5.0, 15.0),
         }
     if form == "thermoelastic_inversion_cord":  # cord force as stroke share; prestretch; stretch range; expansion; lag
         return {
@@ -294,8 +300,9 @@ def belleville_deflection(tension: Array, q: dict[str, float], reference_n: floa
 
 
 def sheath_compression(tension: Array, q: dict[str, float], reference_n: float) -> Array:
-    """The Bowden sheath's shortening [mm]: its coil gaps ``gap (1 - exp(-T / T_g))`` (``T_g`` =
-    ``gap_over_line`` x the reference tension) plus the solid sheath's ``T L / EA``."""
+    """The Bowden sheath's shortening [mm] under the cable's tension ``T`` [N]: its coil gaps
+    ``gap (1 - exp(-T / T_g))`` (``T_g`` = ``gap_over_line`` x the reference tension [N]) plus
+    the solid sheath's ``T L / EA``."""
     closing = q["gap_mm"] * (1.0 - np.exp(-np.clip(tension, 0.0, None) / (q["gap_over_line"] * reference_n)))
     return np.asarray(closing + q["solid_mm_per_n"] * tension, dtype=np.float64)
 
@@ -344,11 +351,14 @@ def render(
         x = bessel_demodulated(x, dt_s, q)
     elif form == "uart_ascii_stream":
         x = uart_stream(x, dt_s, q)
-    elif form in ("belleville_anchor", "bowden_sheath_compression"):
+    elif form == "belleville_anchor":  # the stack carries the muscle's whole pull
         reference = G_MS2 * float(load[0]) + params["k_total_n_mm"] * 0.5 * span
-        tension = line_tension_n(x, load, params)
-        give = belleville_deflection if form == "belleville_anchor" else sheath_compression
-        x = x - give(tension, q, reference)
+        held = belleville_deflection(line_tension_n(x, np.full_like(load, load[0]), params), q, reference)
+        x = x - (belleville_deflection(line_tension_n(x, load, params), q, reference) - held)
+    elif form == "bowden_sheath_compression":  # the cable carries the payload (and its preload) only
+        tension = G_MS2 * load + q["cable_preload_n"]
+        compressed = sheath_compression(tension, q, float(tension[0]))
+        x = x - (compressed - sheath_compression(np.full_like(tension, tension[0]), q, float(tension[0])))
     elif form == "thermoelastic_inversion_cord":
         cord_temp = lowpass(temperature, dt_s, q["cord_thermal_tau_s"])
         share = cord_force_share(x, span, cord_temp, q) - cord_force_share(x, span, np.full_like(x, cord_temp[0]), q)
