@@ -262,6 +262,16 @@ def test_effect_free_records_carry_the_rig_confounds(plant: str) -> None:
     assert np.std(m.u - sim["u"]) < 0.01  # bar: the transducer's noise and step
 
 
+def test_anti_alias_filter_lags_a_ramp_by_its_continuous_time_delay_at_any_rate() -> None:
+    """First-order hold: a ramp lags by ``2 zeta / wn`` exactly, with no half-sample extra."""
+    for rate in BLIND8_RATES_HZ:
+        dt = 1.0 / rate
+        t = np.arange(int(20.0 * rate)) * dt
+        x = np.asarray(10.0 * t, dtype=np.float64)
+        late = (x - anti_alias(x, dt, 0.35))[-10:] / 10.0
+        assert np.allclose(late, 2.0 * np.sqrt(0.5) / (2.0 * np.pi * 0.35 * rate), rtol=1e-6)
+
+
 def test_sar_errors_jump_only_at_carries_into_the_mismatched_bits() -> None:
     params = draw_params("mindlin_crossings", np.random.default_rng(3), 4.0)
     lsb = params["sar_lsb_mm"]

@@ -40,8 +40,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.signal import bessel, cont2discrete, lfilter, lfilter_zi
 
-from tests.plants.blind8_rig import muscle_pressure, stroke_reading
-from tests.plants.filters import lowpass, resonance
+from tests.plants.blind8_rig import muscle_pressure, second_order, stroke_reading
+from tests.plants.filters import lowpass
 
 Array = NDArray[np.float64]
 BLIND8_FORMS: dict[str, tuple[str, ...]] = {
@@ -341,7 +341,7 @@ def render(
     if form == "air_dashpot":
         x = x - air_dashpot_lag(x, dt_s, q)
     elif form == "flywheel_inerter":
-        x = resonance(x, dt_s, 1.0 / (2.0 * math.pi * math.sqrt(q["inertance_s2"])), q["inerter_zeta"])
+        x = second_order(x, dt_s, 1.0 / (2.0 * math.pi * math.sqrt(q["inertance_s2"])), q["inerter_zeta"])
     elif form == "chasset_thirion_cord":
         x = x + q["cord_share"] * chasset_thirion_creep(x, dt_s, q)
     elif form == "crimp_interchange":

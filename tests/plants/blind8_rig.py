@@ -27,8 +27,9 @@ import math
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.signal import cont2discrete, lfilter, lfilter_zi
 
-from tests.plants.filters import lowpass, resonance
+from tests.plants.filters import lowpass
 
 Array = NDArray[np.float64]
 BUTTERWORTH_ZETA = 1.0 / math.sqrt(2.0)
@@ -54,14 +55,27 @@ def port_flow_noise(pressure: Array, dt_s: float, p: dict[str, float]) -> Array:
     rng = np.random.default_rng(int(p["flow_seed"]))
     white = rng.normal(0.0, 1.0, pressure.size)
     tau = 0.025
-    band = lowpass(white, dt_s, tau) * math.sqrt((2.0 * tau / dt_s) if dt_s < tau else 1.0)
+    a = 1.0 - math.exp(-dt_s / tau)
+    band = lowpass(white, dt_s, tau) * math.sqrt((2.0 - a) / a)  # unit variance
     flow = np.abs(np.diff(pressure, prepend=pressure[0])) / dt_s / (p["slew_per_s"] * p["peak"])
     return np.asarray(p["flow_noise_bar"] * np.clip(flow, 0.0, 1.0) * band, dtype=np.float64)
 
 
+def second_order(x: Array, dt_s: float, f_hz: float, zeta: float) -> Array:
+    """``y'' + 2 zeta wn y' + wn^2 y = wn^2 x`` (``wn = 2 pi f_hz``) for a continuous ``x``
+    sampled every ``dt_s``: discretised with a first-order hold (the signal joined linearly
+    between samples, so no half-sample lag of a staircase), at rest on ``x[0]``."""
+    wn = 2.0 * math.pi * f_hz
+    num, den, _ = cont2discrete(([wn * wn], [1.0, 2.0 * zeta * wn, wn * wn]), dt_s, method="foh")
+    b, a = np.asarray(num, dtype=np.float64).ravel(), np.asarray(den, dtype=np.float64)
+    b = b / (b.sum() / a.sum())  # unit DC gain exactly
+    out, _ = lfilter(b, a, x, zi=lfilter_zi(b, a) * x[0])
+    return np.asarray(out, dtype=np.float64)
+
+
 def anti_alias(x: Array, dt_s: float, corner_share: float) -> Array:
     """``x`` through a second-order Butterworth low-pass at ``corner_share`` x the sample rate."""
-    return resonance(x, dt_s, corner_share / dt_s, BUTTERWORTH_ZETA)
+    return second_order(x, dt_s, corner_share / dt_s, BUTTERWORTH_ZETA)
 
 
 def recorded_pressure(u: Array, dt_s: float, p: dict[str, float]) -> Array:
