@@ -11,8 +11,8 @@ auto-zero steps, anti-alias filters) is added by :mod:`tests.plants.blind8_rig`;
   melt again only at a lower stretch; the crystallised share relieves the bladder's elastic
   resistance. The crystallinity follows *Ivshin-Pence* phase kinetics (two boundary curves, the
   state scaled between them from the last reversal: a one-reversal memory, not return-point
-  memory). The bladder's resistance is a Mooney-Rivlin membrane's inflation pressure; the braid
-  is Chou-Hannaford's (closed form).
+  memory). The bladder's resistance is the inflation pressure of its Mooney-Rivlin bulges
+  between the fibres; the braid is Chou-Hannaford's (closed form).
 * :func:`bounding_surface_braid`: the braid's inter-fibre friction as *Dafalias-Popov
   bounding-surface plasticity* in pressure: after every reversal the friction moves elastically
   at first and bends towards a bound (which grows with the normal force, i.e. the pressure)
@@ -79,9 +79,10 @@ def _tabulated(stroke_at: Array, v: Array) -> Array:
 
 
 def mooney_rivlin_resistance(v: Array, p: dict[str, float]) -> Array:
-    """The bladder's resistance [share of peak]: a Mooney-Rivlin membrane's inflation pressure
-    ``(1 / l - 1 / l^7)(1 + beta l^2)`` at the hoop stretch ``l = 1 + s v``, as a share of its
-    value at ``v = 1``, times ``bladder_share``."""
+    """The bladder's resistance [share of peak]: the inflation pressure of its bulges between
+    the braid's fibres (spherical caps of a Mooney-Rivlin membrane, ``(1 / l - 1 / l^7)(1 +
+    beta l^2)``) at the stretch ``l = 1 + s v``, as a share of its value at ``v = 1``, times
+    ``bladder_share``."""
     s, beta = p["hoop_stretch"], p["mr_beta"]
 
     def mr(lam: Array) -> Array:

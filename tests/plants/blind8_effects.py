@@ -203,16 +203,16 @@ def draw_effect_params(effect: str, form: str, rng: np.random.Generator) -> dict
         }
     if form == "thermoelastic_inversion_cord":  # cord force as stroke share; prestretch; stretch range; expansion; lag
         return {
-            "cord_mm_share": rng.uniform(0.6, 1.2),
+            "cord_mm_share": rng.uniform(1.0, 2.5),
             "cord_prestretch": rng.uniform(0.01, 0.04),
             "cord_stretch": rng.uniform(0.15, 0.35),
             "cord_expansion_per_k": rng.uniform(1.8e-4, 2.4e-4),
             "cord_thermal_tau_s": rng.uniform(5.0, 20.0),
         }
-    if form == "drawwire_drum_expansion":  # drum expansion [1/K]; dead length [mm]; lag [s]
+    if form == "drawwire_drum_expansion":  # drum expansion [1/K] (POM to PE); cable out to the carriage [mm]; lag [s]
         return {
-            "drum_alpha_per_k": rng.uniform(0.8e-4, 1.3e-4),
-            "dead_length_mm": rng.uniform(300.0, 1000.0),
+            "drum_alpha_per_k": rng.uniform(0.8e-4, 2.0e-4),
+            "dead_length_mm": rng.uniform(500.0, 2000.0),
             "drum_tau_s": rng.uniform(8.0, 25.0),
         }
     if effect == "none":
