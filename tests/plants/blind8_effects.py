@@ -18,9 +18,9 @@ queued behind the one on the wire and taking ``10 chars / baud``, the logger hol
 complete frame). Load dependence: the muscle's top anchor sits on a stack of *Belleville
 disc springs* (Almen-Laszlo, degressive) that the line's tension (payload plus return spring)
 compresses (sized so that the working pull sits near the discs' flat, constant-force region);
-the muscle pulls its payload through a *Bowden cable whose sheath compresses* (its
-coil gaps close first, softly, then the solid sheath) under the payload's weight. Temperature drift: the rubber return
-cord's *thermoelastic inversion* (entropic force ``~ T`` against thermal expansion: it weakens
+the muscle pulls its payload through a *Bowden cable whose sheath compresses* under the
+payload's weight (its coil gaps close first, softly, then the solid sheath). Temperature drift:
+the rubber return cord's *thermoelastic inversion* (entropic force ``~ T`` against thermal expansion: it weakens
 when warm at small stretch and strengthens at large stretch), through the cord's thermal lag;
 the draw-wire stroke sensor's plastic *drum expanding* (the reading of the whole extension, its
 dead length included, scales by ``1 / (1 + alpha dT)``), through the drum's lag.
