@@ -345,16 +345,32 @@ def test_a_direction_dependent_dead_time_delays_each_direction_by_its_own_time(r
     assert half_way(out, False) - half_way(u, False) == pytest.approx(fall_s, abs=0.02)
 
 
-@pytest.mark.xfail(
-    strict=True, reason="known (v10): a hold counts as falling, so a rise after it waits for the hold's late samples"
-)
-def test_a_rise_after_a_hold_starts_after_the_rise_dead_time():
+@pytest.mark.parametrize("noise", [0.0, 1e-3])
+def test_a_move_after_a_hold_starts_after_its_own_dead_time(noise):
+    """A hold takes the direction of the move that ends it: a rise after a hold is not held back
+    by a longer falling dead time, nor a fall by a longer rising one, and a noisy hold too."""
     from host.diagnose.features import direction_delayed
 
     dt = 0.01
-    u = np.r_[np.zeros(100), np.linspace(0.0, 1.0, 101)]
-    out = direction_delayed(u, dt, 0.05, 0.3)
-    assert np.flatnonzero(out > 0.0)[0] == pytest.approx(np.flatnonzero(u > 0.0)[0] + 5, abs=2)
+    hold = np.random.default_rng(3).normal(0.0, noise, 100)
+    up = np.r_[hold, np.linspace(0.0, 1.0, 101)]
+    out = direction_delayed(up, dt, 0.05, 0.3)
+    assert np.flatnonzero(out > 0.5)[0] == pytest.approx(np.flatnonzero(up > 0.5)[0] + 5, abs=2)
+    down = np.r_[1.0 + hold, np.linspace(1.0, 0.0, 101)]
+    out = direction_delayed(down, dt, 0.3, 0.05)
+    assert np.flatnonzero(out < 0.5)[0] == pytest.approx(np.flatnonzero(down < 0.5)[0] + 5, abs=2)
+
+
+def test_a_fall_that_follows_a_rise_without_a_hold_waits_for_the_rise_to_arrive():
+    """Nothing overtakes what was sent before it: with a late rise and a prompt fall, the turn
+    arrives after the rise's dead time and the fall follows at once."""
+    from host.diagnose.features import direction_delayed
+
+    dt = 0.01
+    u = np.r_[np.linspace(0.0, 1.0, 101), np.linspace(1.0, 0.0, 101)[1:]]
+    out = direction_delayed(u, dt, 0.3, 0.05)
+    assert int(np.argmax(out)) == pytest.approx(100 + 30, abs=2)
+    assert out.max() == pytest.approx(1.0, abs=0.02)
 
 
 def test_a_column_term_is_judged_only_inside_the_columns_training_range():

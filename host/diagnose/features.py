@@ -60,19 +60,38 @@ def actuator_input(u: NDArray[np.float64], dt: float, lag_s: float) -> NDArray[n
     return (u - (1.0 - alpha) * previous) / alpha
 
 
+# a smoothed input rate below this share of its 95th percentile is a hold, not a move
+HOLD_RATE_SHARE = 0.05
+
+
 def direction_delayed(u: NDArray[np.float64], dt: float, rise_s: float, fall_s: float) -> NDArray[np.float64]:
     """``u`` through a dead time that depends on where it is going [s]: a value sent while the
     input rises arrives ``rise_s`` later, one sent while it falls ``fall_s`` later (a valve that
     opens late and exhausts early, or the reverse). Nothing overtakes what was sent before it:
-    a value that would arrive earlier waits for its predecessor. A hold (zero rate) counts as
-    falling, so with ``rise_s < fall_s`` a rise after a hold waits for the hold's late values
-    (a known defect, tests/test_diagnose.py). The arrival times are kept strictly increasing
-    by 1e-9 samples a step, exact for records under ~4 million samples."""
+    a value that would arrive earlier waits for its predecessor. A hold (a smoothed rate under
+    :data:`HOLD_RATE_SHARE` of its 95th percentile, so noise does not flip its direction) takes
+    the direction of the move that ends it, so that move starts after its own dead time; a hold
+    at the end takes the last move's. The arrival times are kept strictly increasing by 1e-9
+    samples a step, exact for records under ~4 million samples."""
+    rising = _move_directions(smoothed_rate(u, dt)) > 0
     index = np.arange(u.size, dtype=np.float64)
-    rising = smoothed_rate(u, dt) > 0
     arrival = np.maximum.accumulate(index + np.where(rising, rise_s, fall_s) / dt)
     arrival += index * 1e-9  # strictly increasing for the interpolation
     return np.interp(index, arrival, u, left=u[0])
+
+
+def _move_directions(rate: NDArray[np.float64]) -> NDArray[np.float64]:
+    """+1 rising, -1 falling per sample; a hold gets the sign of the next move (the last move's
+    at the end of the record; -1 when the input never moves)."""
+    speed = np.abs(rate)
+    moving = speed > HOLD_RATE_SHARE * float(np.percentile(speed, 95))
+    if not moving.any():
+        return -np.ones_like(rate)
+    n = rate.size
+    next_move = np.minimum.accumulate(np.where(moving, np.arange(n), n)[::-1])[::-1]
+    last_move = np.maximum.accumulate(np.where(moving, np.arange(n), -1))
+    source = np.where(next_move < n, next_move, last_move)
+    return np.sign(rate[source])
 
 
 def slow_part(x: NDArray[np.float64], dt: float, tau_s: float) -> NDArray[np.float64]:
