@@ -12,10 +12,10 @@ import warnings
 import numpy as np
 import pytest
 
-from edge.hysteresis.pi import play_outputs
 from host.data import Measurement
 from host.diagnose import run
 from host.diagnose.features import actuator_input, first_order
+from tests.plants.pulses import muscle_stroke, pulse_pressure
 
 SNUBBER_S = 0.009  # between the grid's 6 and 12 ms leads: the test is not an exact inversion
 
@@ -35,22 +35,12 @@ def test_leads_shorter_than_half_a_sample_are_not_tried():
 
 
 def _pulses(snubber_s: float) -> Measurement:
-    """A rate-independent muscle (three plays and a curved spring) driven by pressure pulses
-    with 15 ms edges and holds of 0.3-1.5 s, recorded at 250 Hz through a transducer lag of
-    ``snubber_s``; it starts with a sweep over the full range."""
+    """The pulse-driven muscle (:mod:`tests.plants.pulses`) at 250 Hz for 80 s, its pressure
+    recorded through a transducer lag of ``snubber_s``."""
+    dt, pressure = pulse_pressure(250.0, 80.0)
     rng = np.random.default_rng(3)
-    dt = 1 / 250
-    n = int(80 / dt)
-    pressure = np.zeros(n)
-    k = int(1 / dt)
-    while k < n:
-        hold = int(rng.uniform(0.3, 1.5) / dt)
-        pressure[k : k + hold] = rng.uniform(0.3, 5.0)
-        k += hold
-    pressure = first_order(pressure, dt, 0.015)
-    pressure[: int(1 / dt)] = np.linspace(0.0, 5.0, int(1 / dt))
-    plays = play_outputs(pressure, np.array([0.1, 0.35, 0.8]), np.full(3, pressure[0]))
-    y = 6.0 * plays.sum(axis=1) + 2.0 * pressure**1.3 + rng.normal(0.0, 0.01, n)
+    n = pressure.size
+    y = muscle_stroke(pressure) + rng.normal(0.0, 0.01, n)
     u = first_order(pressure, dt, snubber_s) + rng.normal(0.0, 0.002, n)
     return Measurement(np.arange(n) * dt, u, y, {}, source="snubbed pulses")
 

@@ -33,7 +33,7 @@ from scipy.signal import lfilter
 
 from edge.errors import DataError
 from host.data import Measurement
-from host.diagnose.candidates import CREEP_TAUS_S, DELAYS_S, MIN_DELAY_SAMPLES
+from host.diagnose.candidates import CREEP_TAUS_S, delay_grid
 from host.diagnose.decide import CROSSRUN_GAIN_FLOOR, CandidateScore, why_not
 from host.diagnose.features import actuator_input, branch_offset, slow_part, smoothed_rate
 from host.diagnose.folds import holdout_masks, noise_floor
@@ -147,7 +147,7 @@ def corrected(
     if name == "gain_change":
         return _linear([yhat], y, train)
     if name == "transport_delay":
-        delays = [d for d in DELAYS_S if MIN_DELAY_SAMPLES * dt <= d <= 0.1 * y.size * dt]
+        delays = delay_grid(dt, 0.1 * y.size * dt)
         shifted = [np.r_[np.full(int(round(d / dt)), yhat[0]), yhat[: yhat.size - int(round(d / dt))]] for d in delays]
         return _best([_linear([], y - s, train) + s for s in shifted], y, train) if shifted else yhat
     if name == "rate_dependence":

@@ -628,7 +628,7 @@ TERMS = {
     "x(k - d_fall) while it falls",
     "load_dependence": "load terms: y gets e1*L + e2*L*x + e3*L*x^2 (curve) + e4*L*branch (loop width) + e5*L^2",
     "temperature_drift": "temperature terms: y gets e1*T + e2*T*x + e3*T*x^2 (curve) + e4*T*branch (loop width) "
-    "+ e5*T^2, and f1*Tlag + f2*Tlag*x for T after a 10 s thermal lag",
+    "+ e5*T^2, and f1*Tlag + f2*Tlag*x for T after each of a 3 s and a 10 s thermal lag",
     "output_lag": "first-order lag after the hysteresis: y gets lag(x, tau)",
     "slow_drift": "slow drift in time no column explains: y gets e1*t + e2*t*x + e3*t*x^2 (curve) + e4*t*branch "
     "(loop width) + e5*t^2",
