@@ -1,6 +1,7 @@
-"""Forms of a cause that the record's own time scale sets: a dead time of a few samples of a fast
-record, a dead time the baseline's actuator lag had absorbed; and a drag that saturates with
-speed, which no rate form fits (a known miss).
+"""Forms of a cause that the record's own time scale sets: the dead-time grid in samples and what is
+left of the baseline's actuator lag beside a dead time (unit checks), a dead time of a few
+samples of a fast record; and a drag that saturates with speed, which no rate form fits (a known
+miss).
 
 Each plant is the plain pulse-driven muscle of :mod:`tests.plants.pulses` with one effect added;
 what is checked is the verdict and the form found, not a gain.

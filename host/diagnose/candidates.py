@@ -321,9 +321,10 @@ def transport_delay(ctx: Context) -> Design | None:
     if lag_s < ctx.lag_s:  # part of the baseline's lag became dead time: a second lag must not do as well
         second = _second_order_lag(ctx, lag_s, delay_s)
         if second is not None:
-            rival = _training_error(second.fit(ctx, np.ones(ctx.y.size, dtype=bool)), ctx)
+            every = np.ones(ctx.y.size, dtype=bool)
+            rival = _training_error(second.fit(ctx, every), ctx)
             one.extra["second_lag_rmse"] = rival
-            if _training_error(one.fit(ctx, np.ones(ctx.y.size, dtype=bool)), ctx) >= rival:
+            if _training_error(one.fit(ctx, every), ctx) >= rival:
                 plain = [float(i) for i, pair in enumerate(pairs) if pair[1] == ctx.lag_s]
                 one = _best_of(plain, design, ctx)
     two = direction_dependent_delay(ctx, one.extra["dead_time_s"], one.extra["actuator_lag_with_dead_time_s"])

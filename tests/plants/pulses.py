@@ -2,7 +2,7 @@
 
 Three play operators and a curved spring (stroke in mm for pressure in bar), driven by pressure
 steps with 15 ms edges and random holds of 0.3-1.5 s after a one-second sweep over the range.
-A test adds one effect to :func:`pulse_record`'s output (or to its input reading) and asks
+A test adds one effect to :func:`muscle_stroke` of :func:`pulse_pressure` (or to its input reading) and asks
 whether the diagnosis names it; the plant itself is as plain as a hysteresis gets.
 """
 
