@@ -17,6 +17,7 @@ from tests.plants.blind5_family import blind5_cases, blind5_measurement
 from tests.plants.blind6_family import blind6_cases, blind6_measurement
 from tests.plants.blind7_family import blind7_cases, blind7_measurement
 from tests.plants.blind8_family import blind8_cases, blind8_measurement
+from tests.plants.blind9_family import blind9_cases, blind9_measurement
 from tests.plants.blind_family import blind_cases, blind_measurement
 from tests.plants.family import Case, measurement, tuning_cases
 from tests.plants.fresh_family import fresh_cases, fresh_measurement
@@ -35,4 +36,5 @@ FAMILIES: dict[str, tuple[Cases, Record]] = {
     "blind6": (blind6_cases, blind6_measurement),
     "blind7": (blind7_cases, blind7_measurement),
     "blind8": (blind8_cases, blind8_measurement),
+    "blind9": (blind9_cases, blind9_measurement),
 }
