@@ -1,7 +1,7 @@
 """Forms of a cause that the record's own time scale sets: the dead-time grid in samples and what is
 left of the baseline's actuator lag beside a dead time (unit checks), a dead time of a few
-samples of a fast record; and a drag that saturates with speed, which no rate form fits (a known
-miss).
+samples of a fast record; and two rate effects no rate form fits (known misses): a viscoelastic
+branch (a standard linear solid) and a drag that saturates with speed.
 
 Each plant is the plain pulse-driven muscle of :mod:`tests.plants.pulses` with one effect added;
 what is checked is the verdict and the form found, not a gain.
@@ -17,6 +17,7 @@ import pytest
 from host.data import Measurement
 from host.diagnose import run
 from host.diagnose.candidates import DELAY_RATIO, MIN_DELAY_SAMPLES, _lag_left, delay_grid
+from host.diagnose.features import first_order
 from tests.plants.pulses import muscle_stroke, pulse_pressure
 
 
@@ -81,10 +82,39 @@ def _dragged(x: np.ndarray, dt: float, hold_mm: float, knee_mm_s: float) -> np.n
     return y
 
 
+def _viscoelastic(x: np.ndarray, dt: float, share: float, tau_s: float) -> np.ndarray:
+    """``x`` through a standard linear solid: ``share`` of it follows through a first-order
+    relaxation of ``tau_s``, the rest at once (a rubber bladder's viscoelastic branch)."""
+    return x - share * (x - first_order(x, dt, tau_s))
+
+
+# v12 tried the element itself as a third rate form: relaxations of the hysteresis output at
+# 0.03, 0.1 and 0.3 s, shares >= 0. It named both records here (+78 %, +66 %) and the drag below
+# (+35 %), but on the ten older families' 595 records it named 4 more rate effects and raised 3
+# more false alarms (blind4 0 -> 1/20, blind5 0 -> 2/20): against an all-pole baseline a partial
+# fast lag also fits the rigs' own mechanics (effect-free gains up to +55 %); half of its new
+# verdicts wrong, so it was not kept
+VISCOELASTIC_MISS = (
+    "known (v12): a partial fast lag after the hysteresis is a linear element with a zero, which the "
+    "rigs' mechanics also are; a form for it named 4 more effects and 3 more false alarms, so none is kept"
+)
+
+
+@pytest.mark.xfail(strict=True, reason=VISCOELASTIC_MISS)
+@pytest.mark.parametrize(("share", "tau_s"), [(0.05, 0.1), (0.1, 0.03)])
+def test_a_viscoelastic_branch_is_named_rate_dependence(share, tau_s):
+    """A bladder whose stroke follows 5-10 % of each pressure step through a 30-100 ms relaxation:
+    the stroke shrinks and the loop opens with speed. The rate forms gain +2.5 % and +9.6 %."""
+    dt, pressure = pulse_pressure(200.0, 60.0)
+    stroke = _viscoelastic(muscle_stroke(pressure), dt, share, tau_s)
+    d = _diagnosed(_record(dt, pressure, stroke, "viscoelastic"))
+    assert d.cause == "rate_dependence"
+
+
 @pytest.mark.xfail(
     strict=True,
     reason="known (v11): a drag form tanh(v / v_knee) named this (+38 %) but cost 3-5 false alarms on the "
-    "nine families' effect-free records, so it was dropped; the two rate forms gain 3 % here",
+    "nine families' effect-free records, so it was dropped; the two rate forms gain 3 % here; " + VISCOELASTIC_MISS,
 )
 def test_a_drag_that_saturates_with_speed_is_named_rate_dependence():
     """An eddy-current or viscous brake that slips at its hold: 1.5 % of the stroke's span. v|v|
