@@ -147,12 +147,18 @@ def _training_error(model: FittedModel, ctx: Context) -> float:
     return error if np.isfinite(error) else np.inf
 
 
-def _best_of(values: Sequence[float], design_for: Callable[[float, int], Design], ctx: Context) -> Design:
-    """``design_for(v, iterations)`` for each grid value ``v``: screened with one alternation each,
-    the lowest whole-record RMSE wins and is fitted fully (full alternation on every value would
-    triple the cost; the screening order of the grid values is what matters)."""
+def _screened(values: Sequence[float], design_for: Callable[[float, int], Design], ctx: Context) -> list[float]:
+    """The whole-record RMSE of ``design_for(v, iterations)`` for each grid value ``v``, fitted
+    with one alternation (a screen: full alternation on every value would triple the cost; the
+    screening order of the grid values is what matters)."""
     every = np.ones(ctx.y.size, dtype=bool)
-    errors = [_training_error(design_for(v, SCREEN_ITERATIONS).fit(ctx, every), ctx) for v in values]
+    return [_training_error(design_for(v, SCREEN_ITERATIONS).fit(ctx, every), ctx) for v in values]
+
+
+def _best_of(values: Sequence[float], design_for: Callable[[float, int], Design], ctx: Context) -> Design:
+    """The grid value of ``values`` whose screen (:func:`_screened`) has the lowest whole-record
+    RMSE, fitted fully."""
+    errors = _screened(values, design_for, ctx)
     return design_for(values[int(np.argmin(errors))], FULL_ITERATIONS)
 
 
@@ -316,7 +322,8 @@ def transport_delay(ctx: Context) -> Design | None:
         extra = {"dead_time_s": delay_s, "actuator_lag_with_dead_time_s": lag_s}
         return Design("transport_delay", x, _empty(ctx.y.size), [], ar, extra=extra)
 
-    one = _best_of([float(i) for i in range(len(pairs))], design, ctx)
+    errors = _screened([float(i) for i in range(len(pairs))], design, ctx)
+    one = design(float(np.argmin(errors)), FULL_ITERATIONS)
     lag_s, delay_s = one.extra["actuator_lag_with_dead_time_s"], one.extra["dead_time_s"]
     if lag_s < ctx.lag_s:  # part of the baseline's lag became dead time: a second lag must not do as well
         second = _second_order_lag(ctx, lag_s, delay_s)
@@ -325,8 +332,9 @@ def transport_delay(ctx: Context) -> Design | None:
             rival = _training_error(second.fit(ctx, every), ctx)
             one.extra["second_lag_rmse"] = rival
             if _training_error(one.fit(ctx, every), ctx) >= rival:
-                plain = [float(i) for i, pair in enumerate(pairs) if pair[1] == ctx.lag_s]
-                one = _best_of(plain, design, ctx)
+                # the best dead time with the baseline's lag, from the same screen
+                plain = [i for i, pair in enumerate(pairs) if pair[1] == ctx.lag_s]
+                one = design(float(min(plain, key=lambda i: errors[i])), FULL_ITERATIONS)
     two = direction_dependent_delay(ctx, one.extra["dead_time_s"], one.extra["actuator_lag_with_dead_time_s"])
     return one if two is None else _better_on_record(ctx, (one, two))
 
