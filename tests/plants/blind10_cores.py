@@ -13,9 +13,9 @@ nears the chains' limit), with a lift-off pressure spent inflating the bladder o
 pulling a weight and a return spring. The force balance is solved for the strain by bisection
 (vectorised over the record). The hysteresis:
 
-* :func:`bristle_bladder`: the bladder-braid contact as *Haessig-Friedland bristles*: a few dozen
+* :func:`bristle_bladder`: the bladder-braid contact as *Haessig-Friedland bristles*: 16-32
   bonds, each an elastic bristle that snaps when its deflection passes a limit and re-bonds at
-  once with a random small deflection; the normal force (so the force of every bond) grows with
+  once where it snapped with a random small deflection; the normal force (so the force of every bond) grows with
   the pressure. A friction with presliding and a saw-toothed sliding level, not a sum of
   Masing elements: the loops never repeat exactly. The force is put back into the force balance.
 * :func:`avalanche_crossings`: the braid's crossings as an *Olami-Feder-Christensen* lattice (a
@@ -25,7 +25,7 @@ pulling a weight and a return spring. The force balance is solved for the strain
   total force is put back into the force balance.
 * :func:`check_valve_twin`: *two muscles in parallel* on one payload, the second (thinner, another
   braid angle) fed from the first's line through a pair of opposed *check valves* with cracking
-  pressures of 2.5-7 % of the peak (filling) and 1.5-5 % (venting): the second muscle's pressure is
+  pressures of 4-10 % of the peak (filling) and 3-8 % (venting): the second muscle's pressure is
   an asymmetric play of the first's, and it keeps the venting valve's cracking pressure when the
   line is vented. Hysteresis from the pneumatic circuit, not from friction.
 * :func:`overcentre_latch`: a *snap-action over-centre spring* (a preloaded compression spring on a
@@ -431,7 +431,7 @@ def _draw_muscle(rng: np.random.Generator, g: dict[str, float], stroke: float, t
     x its top stretch invariant) taking 3-8 % of the peak to lift off and 8-18 % of the top force;
     a weight of 5-12 % of the rest and a spring set so that the frictionless stroke at the peak is
     ``stroke`` (at most 60 % of the braid's free contraction). A twin adds a second muscle of
-    35-60 % of the first's area (its own braid angle), counted at the peak less its cracking
+    45-75 % of the first's area (its own braid angle), counted at the peak less its cracking
     pressure."""
     _braid(rng, g)
     d0, length = float(rng.uniform(10.0, 18.0)), float(rng.uniform(120.0, 300.0))
