@@ -16,9 +16,10 @@ from edge.errors import DataError
 from hil.record import record, write_recording
 from host.cli import main
 from host.data import Measurement, load_measurement
-from host.diagnose.decide import COLUMN_GAIN_FLOOR, GAIN_FLOOR, CandidateScore, choose, distinct
+from host.diagnose.decide import COLUMN_GAIN_FLOOR, GAIN_FLOOR, CandidateScore, DecisionInputs, choose, distinct
 from host.diagnose.features import branch_offset
 from host.diagnose.run import CAUSES, DecimatedWarning, decimated, diagnose
+from host.diagnose.signatures import Signature
 from host.identify.common import MemoryStart
 
 
@@ -444,3 +445,52 @@ def test_the_text_output_of_a_tie_names_the_tied_terms_not_the_leading_margins(t
     out = capsys.readouterr().out
     assert "undecided between: creep +43.0%, slow_drift +44.0%" in out
     assert "over its threshold" not in out
+
+
+def test_the_decision_inputs_round_trip_through_json_to_the_same_verdict():
+    """What a verdict is decided from survives JSON (failed folds as -inf, folds without rows as
+    nan, drift margins with gaps, surrogate gains, signatures), so a dumped record is decided
+    again exactly as the diagnosis decided it (bench/diagnose_replay.py)."""
+    scores = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}
+    scores["creep"] = scored("creep", [0.40, 0.42, 0.41])
+    scores["creep"].add(1.0, float("inf"))  # a failed fold
+    scores["creep"].all_gains.append(float("nan"))  # a fold with no rows it can be judged on
+    scores["temperature_drift"] = scored("temperature_drift", [0.30, 0.31, 0.29, 0.30])
+    scores["temperature_drift"].null_gains = [0.1] * 9
+    scores["temperature_drift"].drift_margins = [0.05, None, 0.04, 0.06]
+    found = {"creep": Signature("creep", 3.2, 0.004, "drift during holds")}
+    inputs = DecisionInputs(scores, 0.01, {"temperature": 0.2}, found)
+    again = DecisionInputs.from_json(json.loads(json.dumps(inputs.as_json())))
+    assert again.scores["creep"].all_gains[-2] == -np.inf and np.isnan(again.scores["creep"].all_gains[-1])
+    assert again.scores["temperature_drift"].drift_margins == [0.05, None, 0.04, 0.06]
+    first, second = inputs.verdict(), again.verdict()
+    assert (second.cause, second.reason, second.decided_by) == (first.cause, first.reason, first.decided_by)
+    assert first.cause == "creep" and first.decided_by.startswith("signature")
+
+
+def test_the_replay_bench_scores_a_dump_and_counts_the_verdicts_that_changed(tmp_path, capsys):
+    """bench/diagnose_replay.py decides dumped records again: a line whose dumped verdict the
+    current rules do not reach is counted as changed; a missing dump is one line and exit 2."""
+    from bench.diagnose_replay import main as replay
+
+    clear = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}
+    clear["creep"] = scored("creep", [0.40, 0.42, 0.41, 0.40])
+    quiet = {c: scored(c, [0.0, 0.001, -0.001, 0.0]) for c in CAUSES}
+    lines = [
+        {"family": "f", "index": 0, "case": "a", "effect": "creep", "verdict": "creep", "decision": clear},
+        {"family": "f", "index": 1, "case": "b", "effect": "none", "verdict": "creep", "decision": quiet},
+        {"family": "f", "index": 2, "case": "c", "effect": "none", "verdict": "refused", "decision": None},
+    ]
+    dump = tmp_path / "dump.jsonl"
+    with dump.open("w") as f:
+        for line in lines:
+            if line["decision"] is not None:
+                line["decision"] = DecisionInputs(line["decision"], 0.0, {}, {}).as_json()
+            f.write(json.dumps(line) + "\n")
+    assert replay([str(dump), "--changes"]) == 0
+    out = capsys.readouterr().out
+    assert "f          named   1/1   false alarms  0/2   wrong   0  refused 1" in out
+    assert "1 of 3 verdicts differ from the dump's" in out and "f/001 b: creep -> none (truth none)" in out
+    with pytest.raises(SystemExit) as stop:
+        replay([str(tmp_path / "missing.jsonl")])
+    assert stop.value.code == 2 and "no such dump" in capsys.readouterr().err

@@ -486,3 +486,74 @@ def distinct(verdict: Verdict, scores: dict[str, CandidateScore]) -> Verdict:
     confidence = dict(verdict.confidence)
     confidence["undecided_between"] = [verdict.cause, *rivals]
     return Verdict("none", reason, f"not distinct from {rivals[0]}", confidence, verdict.passing)
+
+
+@dataclass
+class DecisionInputs:
+    """Everything the verdict is decided from, once the candidates are scored: a decision rule
+    can be replayed on it (``bench/diagnose_replay.py``) without refitting a single model."""
+
+    scores: dict[str, CandidateScore]
+    noise: float  # the output's noise floor [units of y]
+    time_correlation: dict[str, float]  # each measured column's correlation with time
+    signatures: dict[str, Signature]
+
+    def verdict(self) -> Verdict:
+        """The held-out verdict, the two-stage signature rule over it, then :func:`distinct`."""
+        held_out = choose(self.scores, self.noise, self.time_correlation)
+        return distinct(with_signatures(held_out, self.scores, self.signatures, self.noise), self.scores)
+
+    def as_json(self) -> dict[str, object]:
+        """Plain JSON values (non-finite gains as strings ``"nan"``, ``"-inf"``: they carry meaning)."""
+        return {
+            "scores": {c: _score_json(s) for c, s in self.scores.items()},
+            "noise": self.noise,
+            "time_correlation": self.time_correlation,
+            "signatures": {c: {"cause": g.cause, **g.as_json()} for c, g in self.signatures.items()},
+        }
+
+    @classmethod
+    def from_json(cls, data: dict[str, object]) -> DecisionInputs:
+        scores = data["scores"]
+        signatures = data["signatures"]
+        assert isinstance(scores, dict) and isinstance(signatures, dict)
+        return cls(
+            {c: _score_from_json(s) for c, s in scores.items()},
+            float(data["noise"]),  # type: ignore[arg-type]
+            {k: float(v) for k, v in data["time_correlation"].items()},  # type: ignore[attr-defined]
+            {c: Signature(g["cause"], float(g["statistic"]), float(g["p_value"]), g["detail"]) for c, g in signatures.items()},
+        )
+
+
+def _number(value: float) -> float | str:
+    return float(value) if np.isfinite(value) else str(float(value))
+
+
+def _score_json(s: CandidateScore) -> dict[str, object]:
+    return {
+        "cause": s.cause,
+        "gains": [_number(g) for g in s.gains],
+        "reductions": [_number(r) for r in s.reductions],
+        "all_gains": [_number(g) for g in s.all_gains],
+        "failed_folds": s.failed_folds,
+        "available": s.available,
+        "null_gains": [_number(g) for g in s.null_gains],
+        "drift_margins": [None if m is None else _number(m) for m in s.drift_margins],
+    }
+
+
+def _score_from_json(data: dict[str, object]) -> CandidateScore:
+    def floats(key: str) -> list[float]:
+        return [float(v) for v in data[key]]  # type: ignore[attr-defined]
+
+    margins = [None if m is None else float(m) for m in data["drift_margins"]]  # type: ignore[attr-defined]
+    return CandidateScore(
+        str(data["cause"]),
+        floats("gains"),
+        floats("reductions"),
+        floats("all_gains"),
+        int(data["failed_folds"]),  # type: ignore[call-overload]
+        bool(data["available"]),
+        floats("null_gains"),
+        margins,
+    )

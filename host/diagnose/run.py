@@ -52,12 +52,10 @@ from host.diagnose.decide import (
     BLOWUP_RATIO,
     GAIN_FLOOR,
     CandidateScore,
-    choose,
+    DecisionInputs,
     column_floor,
     detection_limit,
-    distinct,
     drift_would_be_named,
-    with_signatures,
 )
 from host.diagnose.evidence import baseline_evidence
 from host.diagnose.features import actuator_input, branch_offset, preisach_rows, smoothed_rate
@@ -120,6 +118,7 @@ class Diagnosis:
     context: Context
     notes: list[str]
     memory_assumed: bool = False  # the hysteresis state at the first sample was assumed (see notes)
+    decision: DecisionInputs | None = None  # what the verdict was decided from (for replaying a rule)
 
     def as_json(self) -> dict[str, object]:
         """The result as plain JSON values: non-finite numbers (a fold with no rows to judge, a
@@ -525,7 +524,8 @@ def _diagnose(
     time_correlation = {
         name: float(np.corrcoef(values, ctx.t)[0, 1]) for name, values in ctx.extras.items() if np.ptp(values) > 0
     }
-    verdict = distinct(with_signatures(choose(scores, noise, time_correlation), scores, found, noise), scores)
+    decision = DecisionInputs(scores, noise, time_correlation, found)
+    verdict = decision.verdict()
     cause = verdict.cause
     limits = detection_limits(ctx, masks, base_folds, noise, time_correlation)
     chosen = designs.get(cause) if cause != "none" else None
@@ -578,6 +578,7 @@ def _diagnose(
         context=ctx,
         notes=notes,
         memory_assumed=bool(assumed),
+        decision=decision,
     )
 
 
