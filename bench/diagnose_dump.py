@@ -6,7 +6,8 @@ Usage: python bench/diagnose_dump.py OUT.jsonl [--set tuning,fresh,...] [--effec
 A full scorecard over every family takes about an hour of CPU on this machine; a change to the
 decision rules (a floor, a margin, a surrogate test) does not need any model refitted. This runs
 :func:`host.diagnose.run.diagnose` once per record and appends one JSON line per record to
-``OUT.jsonl``: family, index, case, true effect and form, the verdict, the CPU seconds and the
+``OUT.jsonl``: family, index, case, true effect and form, the verdict, the baseline's actuator
+lag (negative: an input lead), the CPU seconds and the
 :class:`host.diagnose.decide.DecisionInputs` (every candidate's fold gains, surrogate gains and
 drift margins, the noise floor, the columns' correlation with time, the residual signatures).
 ``bench/diagnose_replay.py`` then decides every record again with the working tree's rules in
@@ -47,7 +48,8 @@ def dumped(job: Job) -> dict[str, object]:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             d = diagnose(m, progress=False)
-        line.update(verdict=d.cause, decision=d.decision.as_json() if d.decision else None)
+        line.update(verdict=d.cause, actuator_lag_s=d.context.lag_s)
+        line["decision"] = d.decision.as_json() if d.decision else None
     except DataError as e:
         line.update(verdict="refused", message=str(e), decision=None)
     line["cpu_s"] = time.process_time() - start

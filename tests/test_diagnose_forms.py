@@ -53,6 +53,10 @@ def test_what_is_left_of_the_baseline_lag_after_a_dead_time_is_on_its_grid():
     assert _lag_left(Ctx(), 0.03) == 0.05  # type: ignore[arg-type]
     assert _lag_left(Ctx(), 0.1) == 0.0  # type: ignore[arg-type]
     assert _lag_left(Ctx(), 0.3) == 0.0  # type: ignore[arg-type]
+    Ctx.lag_s = -0.012  # a lead: no lag to take over, the lead is kept
+    assert _lag_left(Ctx(), 0.03) == -0.012  # type: ignore[arg-type]
+    Ctx.lag_s = 0.0
+    assert _lag_left(Ctx(), 0.03) == 0.0  # type: ignore[arg-type]
 
 
 def test_a_dead_time_of_six_samples_at_one_kilohertz_is_named():
