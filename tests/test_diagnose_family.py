@@ -14,7 +14,8 @@ built blind for v9 and scored once each (blind5 before v9's thermal-lag terms, b
 ``tests/plants/blind7_family.py`` the ninth, built blind for v10 and scored once, at its end
 (its report was read before v11, whose 3 s thermal lag answers one of its forms);
 ``tests/plants/blind8_family.py`` the tenth, built blind for v11 and scored once, at its end;
-``tests/plants/blind9_family.py`` the eleventh, built blind for v12 and scored once, at its end.
+``tests/plants/blind9_family.py`` the eleventh, built blind for v12 and scored once, at its end;
+``tests/plants/blind10_family.py`` the twelfth, built blind for v13 and scored once, at its end.
 The targets are the
 issue's, on the held-out set: at least 90 % of the effects named, at most 1 false alarm in 10
 effect-free records. ``python bench/diagnose_scorecard.py`` prints the same tables with every verdict.
@@ -57,6 +58,7 @@ SCORECARDS = {
     "blind7": (11, 40, 1, 20),
     "blind8": (14, 40, 0, 20),
     "blind9": (12, 40, 0, 20),
+    "blind10": (8, 40, 1, 20),
 }
 FAMILIES = {name: Family(*REGISTRY[name], *scorecard) for name, scorecard in SCORECARDS.items()}
 HELD_OUT = [name for name in FAMILIES if name != "tuning"]
