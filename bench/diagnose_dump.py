@@ -3,7 +3,7 @@
 Usage: python bench/diagnose_dump.py OUT.jsonl [--set tuning,fresh,...] [--effect none,creep,...]
        [--duration S] [--workers N]      (default: every family and effect, 100 s records)
 
-A full scorecard over every family takes about an hour of CPU on this machine; a change to the
+A full scorecard over every family takes about 1.5 h of CPU on this machine (7 s a record); a change to the
 decision rules (a floor, a margin, a surrogate test) does not need any model refitted. This runs
 :func:`host.diagnose.run.diagnose` once per record and appends one JSON line per record to
 ``OUT.jsonl``: family, index, case, true effect and form, the verdict, the baseline's actuator
@@ -12,15 +12,20 @@ lag (negative: an input lead), the CPU seconds and the
 drift margins, the noise floor, the columns' correlation with time, the residual signatures).
 ``bench/diagnose_replay.py`` then decides every record again with the working tree's rules in
 seconds. A record the diagnosis refuses (``DataError``) is written with the verdict ``refused``
-and its message. The file is appended to and records already in it are skipped, so an
-interrupted run resumes where it stopped; a dump belongs to the code that made it (a change to
-a candidate's fit needs a new dump).
+and its message, one whose diagnosis fails otherwise with ``error`` and the exception (a
+defect to fix; the run goes on). The file is appended to and records already in it are
+skipped, so an interrupted run resumes where it stopped (a last line cut by the interruption is
+dropped and its record diagnosed again). Every line carries the record duration and the code
+version (``git describe --always --dirty``); a dump belongs to the code that made it, so
+resuming with another duration or version is refused: start a new file.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
+import subprocess
 import sys
 import time
 import warnings
@@ -34,16 +39,18 @@ from host.diagnose.run import diagnose  # noqa: E402
 from tests.plants.families import FAMILIES  # noqa: E402
 from tests.plants.family import Case  # noqa: E402
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from diagnose_replay import DumpError, Line, read_dump  # noqa: E402
+
 Job = tuple[str, int, Case]
 
 
-def dumped(job: Job) -> dict[str, object]:
+def dumped(job: Job) -> Line:
     """One record's line: its case, truth, verdict, CPU seconds and decision inputs."""
     family, index, case = job
     m, _ = FAMILIES[family][1](case)
     start = time.process_time()
-    line: dict[str, object] = {"family": family, "index": index, "case": case.name, "effect": case.effect}
-    line["form"] = case.form
+    line: Line = {"family": family, "index": index, "case": case.name, "effect": case.effect, "form": case.form}
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -52,16 +59,59 @@ def dumped(job: Job) -> dict[str, object]:
         line["decision"] = d.decision.as_json() if d.decision else None
     except DataError as e:
         line.update(verdict="refused", message=str(e), decision=None)
+    except Exception as e:  # noqa: BLE001 - a failed record is written down, the others still run
+        line.update(verdict="error", message=f"{type(e).__name__}: {e}", decision=None)
     line["cpu_s"] = time.process_time() - start
     return line
 
 
-def done_in(path: Path) -> set[tuple[str, int]]:
-    """(family, index) of every record already in the dump at ``path``."""
-    if not path.exists():
+def code_version() -> str:
+    """``git describe --always --dirty`` of this checkout, or ``unknown`` outside a git checkout."""
+    try:
+        done = subprocess.run(
+            ["git", "describe", "--always", "--dirty"],
+            cwd=Path(__file__).resolve().parent,
+            capture_output=True,
+            text=True,
+            timeout=10,
+        )
+    except (OSError, subprocess.TimeoutExpired):
+        return "unknown"
+    return done.stdout.strip() if done.returncode == 0 else "unknown"
+
+
+def without_cut_tail(path: Path) -> bool:
+    """Drop a last line that an interrupted write left without its newline; whether one was."""
+    data = path.read_bytes()
+    if not data or data.endswith(b"\n"):
+        return False
+    path.write_bytes(data[: data.rfind(b"\n") + 1])
+    return True
+
+
+def resumed(parser: argparse.ArgumentParser, out: Path, duration_s: float, version: str) -> set[tuple[str, int]]:
+    """(family, index) of every record already in ``out``, after checking it can be appended to
+    with this duration and code version (a problem is one line from ``parser``, exit 2)."""
+    if out.is_dir():
+        parser.error(f"{out}: is a folder; give a file name for the dump")
+    if not out.parent.is_dir():
+        parser.error(f"{out.parent}: no such folder; create it or write the dump elsewhere")
+    if not out.exists():
         return set()
-    with path.open() as f:
-        return {(row["family"], int(row["index"])) for row in map(json.loads, f) if row}
+    if without_cut_tail(out):
+        print(f"{out}: dropped a last line cut by an interruption; its record is diagnosed again", file=sys.stderr)
+    try:
+        rows = read_dump(out)
+    except DumpError as e:
+        parser.error(f"{e}; give a new file for the dump")
+    for key, now in (("duration_s", duration_s), ("code", version)):
+        before = {row[key] for row in rows if key in row}
+        if before and before != {now}:
+            parser.error(
+                f"{out} holds records made with {key} {', '.join(map(str, sorted(before)))}, not {now}; "
+                "a dump belongs to one duration and one code version: give a new file"
+            )
+    return {(row["family"], int(row["index"])) for row in rows}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -76,18 +126,34 @@ def main(argv: list[str] | None = None) -> int:
     unknown = [s for s in names if s not in FAMILIES]
     if unknown or not names:
         parser.error(f"--set: unknown family {', '.join(unknown) or '(none given)'}; use some of {', '.join(FAMILIES)}")
-    if args.duration <= 0 or args.workers < 1:
-        parser.error("--duration must be > 0 s and --workers >= 1")
-    done = done_in(args.out)
-    jobs = [(s, i, c) for s in names for i, c in enumerate(FAMILIES[s][0](args.duration)) if (s, i) not in done]
+    if not math.isfinite(args.duration) or args.duration <= 0 or args.workers < 1:
+        parser.error("--duration must be a number of seconds > 0 and --workers >= 1")
+    version = code_version()
+    done = resumed(parser, args.out, args.duration, version)
+    jobs = [(s, i, c) for s in names for i, c in enumerate(FAMILIES[s][0](args.duration))]
     if args.effect:
-        jobs = [job for job in jobs if job[2].effect in args.effect.split(",")]
-    print(f"{len(jobs)} records to diagnose ({len(done)} already in {args.out})", file=sys.stderr)
-    with Pool(args.workers) as pool, args.out.open("a") as out:
-        for k, line in enumerate(pool.imap_unordered(dumped, jobs), 1):
-            out.write(json.dumps(line) + "\n")
-            out.flush()
-            print(f"{k}/{len(jobs)} {line['case']}: {line['verdict']} ({line['cpu_s']:.1f} s CPU)", flush=True)
+        wanted, known = args.effect.split(","), sorted({c.effect for _, _, c in jobs})
+        if not set(wanted) <= set(known):
+            parser.error(
+                f"--effect: unknown {', '.join(sorted(set(wanted) - set(known)))}; use some of {', '.join(known)}"
+            )
+        jobs = [job for job in jobs if job[2].effect in wanted]
+    todo = [job for job in jobs if (job[0], job[1]) not in done]
+    print(f"{len(todo)} records to diagnose ({len(jobs) - len(todo)} already in {args.out})", flush=True)
+    written = 0
+    try:
+        with Pool(args.workers) as pool, args.out.open("a") as out:
+            for line in pool.imap_unordered(dumped, todo):
+                line.update(duration_s=args.duration, code=version)
+                out.write(json.dumps(line) + "\n")
+                out.flush()
+                written += 1
+                print(
+                    f"{written}/{len(todo)} {line['case']}: {line['verdict']} ({line['cpu_s']:.1f} s CPU)", flush=True
+                )
+    except KeyboardInterrupt:
+        print(f"interrupted: {written} records written to {args.out}; run the same command to resume", file=sys.stderr)
+        return 130
     return 0
 
 

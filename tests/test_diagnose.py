@@ -489,8 +489,52 @@ def test_the_replay_bench_scores_a_dump_and_counts_the_verdicts_that_changed(tmp
             f.write(json.dumps(line) + "\n")
     assert replay([str(dump), "--changes"]) == 0
     out = capsys.readouterr().out
-    assert "f          named   1/1   false alarms  0/2   wrong   0  refused 1" in out
+    assert "f          named   1/1   false alarms  0/2   wrong   0  refused 1  failed 0" in out
     assert "1 of 3 verdicts differ from the dump's" in out and "f/001 b: creep -> none (truth none)" in out
     with pytest.raises(SystemExit) as stop:
         replay([str(tmp_path / "missing.jsonl")])
     assert stop.value.code == 2 and "no such dump" in capsys.readouterr().err
+
+
+def test_the_replay_bench_refuses_a_dump_it_cannot_read_in_one_line(tmp_path, capsys):
+    """A line that is not a dump line names its file and line; a record twice and a family the
+    dumps do not hold are refused rather than counted."""
+    from bench.diagnose_replay import main as replay
+
+    line = {"family": "f", "index": 0, "case": "a", "effect": "none", "verdict": "refused", "decision": None}
+    good = tmp_path / "good.jsonl"
+    good.write_text(json.dumps(line) + "\n")
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text(json.dumps(line) + "\n" + '{"family": "f", "ind')
+    for argv, message in (
+        ([str(bad)], "bad.jsonl:2: not a JSON line"),
+        ([str(good), str(good)], "record f/000 is in the dumps twice"),
+        ([str(good), "--set", "f,g"], "--set: g not in the dumps; they hold f"),
+    ):
+        with pytest.raises(SystemExit) as stop:
+            replay(argv)
+        assert stop.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_the_dump_bench_resumes_after_a_cut_line_and_refuses_another_duration_or_code(tmp_path, capsys):
+    """An interrupted dump is appended to: a last line cut by the interruption is dropped (its
+    record is diagnosed again) and the records before it are skipped; records of another
+    duration or code version are not mixed into one dump."""
+    import argparse
+
+    from bench.diagnose_dump import resumed
+
+    parser = argparse.ArgumentParser()
+    out = tmp_path / "dump.jsonl"
+    line = {"family": "f", "index": 3, "case": "a", "effect": "none", "verdict": "none", "decision": None}
+    out.write_text(json.dumps({**line, "duration_s": 100.0, "code": "v1"}) + "\n" + '{"family": "f", "in')
+    assert resumed(parser, out, 100.0, "v1") == {("f", 3)}
+    assert out.read_text().endswith("}\n") and "dropped a last line" in capsys.readouterr().err
+    for duration, code, what in ((50.0, "v1", "duration_s 100.0, not 50.0"), (100.0, "v2", "code v1, not v2")):
+        with pytest.raises(SystemExit) as stop:
+            resumed(parser, out, duration, code)
+        assert stop.value.code == 2 and what in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        resumed(parser, tmp_path / "no" / "dump.jsonl", 100.0, "v1")
+    assert "no such folder" in capsys.readouterr().err
+    assert resumed(parser, tmp_path / "new.jsonl", 100.0, "v1") == set()

@@ -380,7 +380,7 @@ def delay_grid(dt: float, longest_s: float) -> list[float]:
 
 
 def _lag_left(ctx: Context, delay_s: float) -> float:
-    """The longest actuator lag of the baseline's grid (at least 0) no longer than the baseline's
+    """The longest actuator lag of the baseline's grid (0 or more) no longer than the baseline's
     lag less ``delay_s``: what remains of the lag once a dead time explains part of it. A
     baseline that reads the input through a lead (``lag_s <= 0``) has no lag a dead time could
     take over: its own reading is kept (pairing the dead time with no lag would drop the lead)."""

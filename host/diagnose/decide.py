@@ -48,6 +48,7 @@ in the README.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -504,28 +505,43 @@ class DecisionInputs:
         return distinct(with_signatures(held_out, self.scores, self.signatures, self.noise), self.scores)
 
     def as_json(self) -> dict[str, object]:
-        """Plain JSON values (non-finite gains as strings ``"nan"``, ``"-inf"``: they carry meaning)."""
+        """Plain JSON values; a non-finite number as its name (``"nan"``, ``"-inf"``: a failed fold,
+        a fold without rows to judge carry meaning)."""
         return {
             "scores": {c: _score_json(s) for c, s in self.scores.items()},
-            "noise": self.noise,
-            "time_correlation": self.time_correlation,
-            "signatures": {c: {"cause": g.cause, **g.as_json()} for c, g in self.signatures.items()},
+            "noise": _number(self.noise),
+            "time_correlation": {k: _number(v) for k, v in self.time_correlation.items()},
+            "signatures": {
+                c: {
+                    "cause": g.cause,
+                    "statistic": _number(g.statistic),
+                    "p_value": _number(g.p_value),
+                    "detail": g.detail,
+                }
+                for c, g in self.signatures.items()
+            },
         }
 
     @classmethod
-    def from_json(cls, data: dict[str, object]) -> DecisionInputs:
-        scores = data["scores"]
-        signatures = data["signatures"]
-        assert isinstance(scores, dict) and isinstance(signatures, dict)
-        return cls(
-            {c: _score_from_json(s) for c, s in scores.items()},
-            float(data["noise"]),  # type: ignore[arg-type]
-            {k: float(v) for k, v in data["time_correlation"].items()},  # type: ignore[attr-defined]
-            {c: Signature(g["cause"], float(g["statistic"]), float(g["p_value"]), g["detail"]) for c, g in signatures.items()},
-        )
+    def from_json(cls, data: dict[str, Any]) -> DecisionInputs:
+        """The inputs :meth:`as_json` wrote (``"nan"``, ``"inf"``, ``"-inf"`` read back as floats);
+        ``ValueError`` for anything else."""
+        try:
+            return cls(
+                {c: _score_from_json(s) for c, s in data["scores"].items()},
+                float(data["noise"]),
+                {k: float(v) for k, v in data["time_correlation"].items()},
+                {
+                    c: Signature(str(g["cause"]), float(g["statistic"]), float(g["p_value"]), str(g["detail"]))
+                    for c, g in data["signatures"].items()
+                },
+            )
+        except (KeyError, TypeError, AttributeError) as e:
+            raise ValueError(f"not the decision inputs of a diagnosis ({type(e).__name__}: {e})") from None
 
 
 def _number(value: float) -> float | str:
+    """``value``, or its name when it is not finite (strict JSON has no NaN or infinity)."""
     return float(value) if np.isfinite(value) else str(float(value))
 
 
@@ -542,18 +558,17 @@ def _score_json(s: CandidateScore) -> dict[str, object]:
     }
 
 
-def _score_from_json(data: dict[str, object]) -> CandidateScore:
+def _score_from_json(data: dict[str, Any]) -> CandidateScore:
     def floats(key: str) -> list[float]:
-        return [float(v) for v in data[key]]  # type: ignore[attr-defined]
+        return [float(v) for v in data[key]]
 
-    margins = [None if m is None else float(m) for m in data["drift_margins"]]  # type: ignore[attr-defined]
     return CandidateScore(
         str(data["cause"]),
         floats("gains"),
         floats("reductions"),
         floats("all_gains"),
-        int(data["failed_folds"]),  # type: ignore[call-overload]
+        int(data["failed_folds"]),
         bool(data["available"]),
         floats("null_gains"),
-        margins,
+        [None if m is None else float(m) for m in data["drift_margins"]],
     )
