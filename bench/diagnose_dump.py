@@ -3,8 +3,8 @@
 Usage: python bench/diagnose_dump.py OUT.jsonl [--set tuning,fresh,...] [--effect none,creep,...]
        [--duration S] [--workers N]      (default: every family and effect, 100 s records)
 
-A full scorecard over every family takes about 1.5 h of CPU on this machine (7 s a record); a change to the
-decision rules (a floor, a margin, a surrogate test) does not need any model refitted. This runs
+A full scorecard over every family takes about 1.5 h of CPU on this machine (7 s a record); a
+change to the decision rules (a floor, a margin, a surrogate test) needs no model refitted. This runs
 :func:`host.diagnose.run.diagnose` once per record and appends one JSON line per record to
 ``OUT.jsonl``: family, index, case, true effect and form, the verdict, the baseline's actuator
 lag (negative: an input lead), the CPU seconds and the
