@@ -48,7 +48,7 @@ from host.diagnose.candidates import baseline, with_columns  # noqa: E402
 from host.diagnose.decide import against_baseline, floor_for  # noqa: E402
 from host.diagnose.folds import BLOCKS_PER_FOLD, holdout_masks, noise_floor  # noqa: E402
 from host.diagnose.run import diagnose, finite_or_null, held_out_score  # noqa: E402
-from tests.plants.families import FAMILIES  # noqa: E402
+from tests.plants.families import FAMILIES, family_names  # noqa: E402
 from tests.plants.family import Case  # noqa: E402
 
 FOLDS = 4
@@ -136,10 +136,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--only", help="run only cases whose name contains this text")
     parser.add_argument("--json", type=Path, help="write every row here")
     args = parser.parse_args(argv)
-    sets = args.set.split(",")
-    unknown = [s for s in sets if s not in SETS]
-    if unknown:
-        parser.error(f"unknown set {', '.join(unknown)}; known: {', '.join(SETS)}")
+    try:
+        sets = family_names(args.set, SETS)
+    except ValueError as e:
+        parser.error(f"--set: {e}")
     jobs: list[tuple[str, Case]] = []
     for s in sets:
         cases = SETS[s](args.duration)

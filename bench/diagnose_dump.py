@@ -36,7 +36,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from edge.errors import DataError  # noqa: E402
 from host.diagnose.run import diagnose  # noqa: E402
-from tests.plants.families import FAMILIES  # noqa: E402
+from tests.plants.families import FAMILIES, family_names  # noqa: E402
 from tests.plants.family import Case  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -122,10 +122,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--duration", type=float, default=100.0, metavar="S")
     parser.add_argument("--workers", type=int, default=1)
     args = parser.parse_args(argv)
-    names = [s for s in args.set.split(",") if s]
-    unknown = [s for s in names if s not in FAMILIES]
-    if unknown or not names:
-        parser.error(f"--set: unknown family {', '.join(unknown) or '(none given)'}; use some of {', '.join(FAMILIES)}")
+    try:
+        names = family_names(args.set)
+    except ValueError as e:
+        parser.error(f"--set: {e}")
     if not math.isfinite(args.duration) or args.duration <= 0 or args.workers < 1:
         parser.error("--duration must be a number of seconds > 0 and --workers >= 1")
     version = code_version()

@@ -35,7 +35,7 @@ from host.diagnose.features import actuator_input, preisach_rows  # noqa: E402
 from host.diagnose.folds import noise_floor  # noqa: E402
 from host.diagnose.hammerstein import fit_hammerstein, rmse  # noqa: E402
 from host.diagnose.run import PREISACH_LEVELS, choose_actuator_lag, decimated, known_memory, prepare  # noqa: E402
-from tests.plants.families import FAMILIES  # noqa: E402
+from tests.plants.families import FAMILIES, family_names  # noqa: E402
 from tests.plants.family import Case  # noqa: E402
 
 
@@ -71,10 +71,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--json", type=Path, help="write every row here")
     args = parser.parse_args(argv)
-    sets = args.set.split(",")
-    unknown = [s for s in sets if s not in FAMILIES]
-    if unknown:
-        parser.error(f"unknown set {', '.join(unknown)}; known: {', '.join(FAMILIES)}")
+    try:
+        sets = family_names(args.set)
+    except ValueError as e:
+        parser.error(f"--set: {e}")
     try:
         levels = tuple(int(v) for v in args.levels.split(","))
     except ValueError:

@@ -29,6 +29,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from bench.diagnose_scorecard import SETS, diagnosed  # noqa: E402
+from tests.plants.families import family_names  # noqa: E402
 from tests.plants.family import Case  # noqa: E402
 
 
@@ -89,10 +90,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--only", help="run only cases whose name contains this text")
     args = parser.parse_args(argv)
-    sets = args.set.split(",")
-    unknown = [s for s in sets if s not in SETS]
-    if unknown:
-        parser.error(f"unknown set {', '.join(unknown)}; use {', '.join(SETS)}")
+    try:
+        sets = family_names(args.set, SETS)
+    except ValueError as e:
+        parser.error(f"--set: {e}")
     cuts = tuple(float(c) for c in args.cuts.split(","))
     jobs = [
         (name, case, cuts, args.from_end)

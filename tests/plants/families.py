@@ -6,7 +6,7 @@ family test (``tests/test_diagnose_family.py``), so a new family is added in one
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from typing import Any
 
 from host.data import Measurement
@@ -40,3 +40,14 @@ FAMILIES: dict[str, tuple[Cases, Record]] = {
     "blind9": (blind9_cases, blind9_measurement),
     "blind10": (blind10_cases, blind10_measurement),
 }
+
+
+def family_names(text: str, known: Collection[str] = tuple(FAMILIES)) -> list[str]:
+    """The family names in ``text`` (comma-separated, blanks dropped), each one of ``known``;
+    ``ValueError`` naming what is unknown (or that none was given) and the names to use, for a
+    bench's ``--set`` to report in one line."""
+    names = [name for name in text.split(",") if name]
+    unknown = [name for name in names if name not in known]
+    if unknown or not names:
+        raise ValueError(f"unknown family {', '.join(unknown) or '(none given)'}; use some of {', '.join(known)}")
+    return names
