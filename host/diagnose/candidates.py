@@ -155,11 +155,17 @@ def _screened(values: Sequence[float], design_for: Callable[[float, int], Design
     return [_training_error(design_for(v, SCREEN_ITERATIONS).fit(ctx, every), ctx) for v in values]
 
 
+def _fully_fitted(
+    values: Sequence[float], errors: Sequence[float], design_for: Callable[[float, int], Design]
+) -> Design:
+    """The value of ``values`` with the lowest screened ``errors`` (the first on a tie), fitted fully."""
+    return design_for(values[int(np.argmin(errors))], FULL_ITERATIONS)
+
+
 def _best_of(values: Sequence[float], design_for: Callable[[float, int], Design], ctx: Context) -> Design:
     """The grid value of ``values`` whose screen (:func:`_screened`) has the lowest whole-record
     RMSE, fitted fully."""
-    errors = _screened(values, design_for, ctx)
-    return design_for(values[int(np.argmin(errors))], FULL_ITERATIONS)
+    return _fully_fitted(values, _screened(values, design_for, ctx), design_for)
 
 
 def _better_on_record(ctx: Context, forms: Sequence[Design]) -> Design:
@@ -322,8 +328,9 @@ def transport_delay(ctx: Context) -> Design | None:
         extra = {"dead_time_s": delay_s, "actuator_lag_with_dead_time_s": lag_s}
         return Design("transport_delay", x, _empty(ctx.y.size), [], ar, extra=extra)
 
-    errors = _screened([float(i) for i in range(len(pairs))], design, ctx)
-    one = design(float(np.argmin(errors)), FULL_ITERATIONS)
+    indices = [float(i) for i in range(len(pairs))]
+    errors = _screened(indices, design, ctx)
+    one = _fully_fitted(indices, errors, design)
     lag_s, delay_s = one.extra["actuator_lag_with_dead_time_s"], one.extra["dead_time_s"]
     if lag_s < ctx.lag_s:  # part of the baseline's lag became dead time: a second lag must not do as well
         second = _second_order_lag(ctx, lag_s, delay_s)
@@ -334,7 +341,7 @@ def transport_delay(ctx: Context) -> Design | None:
             if _training_error(one.fit(ctx, every), ctx) >= rival:
                 # the best dead time with the baseline's lag, from the same screen
                 plain = [i for i, pair in enumerate(pairs) if pair[1] == ctx.lag_s]
-                one = design(float(min(plain, key=lambda i: errors[i])), FULL_ITERATIONS)
+                one = _fully_fitted([indices[i] for i in plain], [errors[i] for i in plain], design)
     two = direction_dependent_delay(ctx, one.extra["dead_time_s"], one.extra["actuator_lag_with_dead_time_s"])
     return one if two is None else _better_on_record(ctx, (one, two))
 
