@@ -11,9 +11,10 @@ lag (negative: an input lead), the CPU seconds and the
 :class:`host.diagnose.decide.DecisionInputs` (every candidate's fold gains, surrogate gains and
 drift margins, the noise floor, the columns' correlation with time, the residual signatures).
 ``bench/diagnose_replay.py`` then decides every record again with the working tree's rules in
-seconds. A record the diagnosis refuses (``DataError``) is written with the verdict ``refused``
-and its message, one whose diagnosis fails otherwise with ``error`` and the exception (a
-defect to fix; the run goes on). The file is appended to and records already in it are
+seconds. Each line holds the scorecard's row of the record (``bench/diagnose_scorecard.py``): a
+record the diagnosis refuses (``DataError``) has the verdict ``refused`` and its message; one
+whose diagnosis fails otherwise is written with ``error`` and the exception (a defect to fix;
+the run goes on). The file is appended to and records already in it are
 skipped, so an interrupted run resumes where it stopped (a last line cut by the interruption is
 dropped and its record diagnosed again). Every line carries the record duration and the code
 version (``git describe --always --dirty``); a dump belongs to the code that made it, so
@@ -28,14 +29,12 @@ import math
 import subprocess
 import sys
 import time
-import warnings
 from multiprocessing import Pool
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from edge.errors import DataError  # noqa: E402
-from host.diagnose.run import diagnose  # noqa: E402
+from bench.diagnose_scorecard import diagnosed  # noqa: E402
 from tests.plants.families import FAMILIES, family_names  # noqa: E402
 from tests.plants.family import Case  # noqa: E402
 
@@ -46,22 +45,17 @@ Job = tuple[str, int, Case]
 
 
 def dumped(job: Job) -> Line:
-    """One record's line: its case, truth, verdict, CPU seconds and decision inputs."""
+    """One record's line: its case, truth and the scorecard's row of it
+    (:func:`bench.diagnose_scorecard.diagnosed`: verdict, CPU seconds, decision inputs, ...)."""
     family, index, case = job
     m, _ = FAMILIES[family][1](case)
-    start = time.process_time()
     line: Line = {"family": family, "index": index, "case": case.name, "effect": case.effect, "form": case.form}
+    start = time.process_time()
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            d = diagnose(m, progress=False)
-        line.update(verdict=d.cause, actuator_lag_s=d.context.lag_s)
-        line["decision"] = d.decision.as_json() if d.decision else None
-    except DataError as e:
-        line.update(verdict="refused", message=str(e), decision=None)
+        line.update(diagnosed(m))
     except Exception as e:  # noqa: BLE001 - a failed record is written down, the others still run
         line.update(verdict="error", message=f"{type(e).__name__}: {e}", decision=None)
-    line["cpu_s"] = time.process_time() - start
+        line["cpu_s"] = time.process_time() - start
     return line
 
 

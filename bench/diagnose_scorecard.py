@@ -52,9 +52,10 @@ SETS = FAMILIES
 def diagnosed(m: Measurement, assume_state: bool = True) -> dict[str, object]:
     """One scored diagnosis of ``m`` (warnings silenced): verdict, held-out gain, confidence, CPU
     seconds, samples, which evidence decided, whether the hysteresis state at its first sample
-    was assumed. A record the method refuses in one line (a ``DataError``) is the verdict
-    ``refused`` with its message: a counted miss, not a crash. ``assume_state``: as
-    :func:`host.diagnose.run.diagnose`'s."""
+    was assumed, the baseline's actuator lag and what the verdict was decided from
+    (:class:`host.diagnose.decide.DecisionInputs` as JSON; None when refused). A record the
+    method refuses in one line (a ``DataError``) is the verdict ``refused`` with its message: a
+    counted miss, not a crash. ``assume_state``: as :func:`host.diagnose.run.diagnose`'s."""
     start = time.process_time()
     try:
         with warnings.catch_warnings():
@@ -62,11 +63,11 @@ def diagnosed(m: Measurement, assume_state: bool = True) -> dict[str, object]:
             d = diagnose(m, progress=False, assume_state=assume_state)
     except DataError as refusal:
         outcome: dict[str, object] = {"verdict": "refused", "refusal": str(refusal), "gain": 0.0, "confidence": {}}
-        outcome["memory_assumed"] = False
-        outcome["decided_by"] = "refused"
+        outcome.update(memory_assumed=False, decided_by="refused", decision=None)
     else:
         outcome = {"verdict": d.cause, "gain": d.gain, "confidence": d.confidence, "decided_by": d.decided_by}
-        outcome["memory_assumed"] = d.memory_assumed
+        outcome.update(memory_assumed=d.memory_assumed, actuator_lag_s=d.context.lag_s)
+        outcome["decision"] = d.decision.as_json() if d.decision else None
     return {**outcome, "cpu_s": time.process_time() - start, "samples": len(m)}
 
 
