@@ -98,8 +98,10 @@ SEPARATING_PROTOCOL = {
     "dead time delays every move by the same time, a speed-dependent lag vanishes when the output stops",
     frozenset(("transport_delay", "output_lag")): "small fast steps: a dead time delays the start of the "
     "move, a lag only rounds it",
-    frozenset(("rate_dependence", "output_lag")): "the same loop at three or more speeds: a lag shifts it "
-    "in proportion to speed, a rate-dependent loop changes its width",
+    frozenset(("rate_dependence", "output_lag")): "the same loop at three or more speeds, and small steps at a "
+    "low and at a high pressure: a lag shifts the loop in proportion to speed and fixed mechanics ring alike at "
+    "every pressure; a rate-dependent loop changes its width, and a payload on the muscle's stiffness rings "
+    "faster at high pressure",
     frozenset(("load_dependence", "temperature_drift")): "vary the load at a steady temperature (or the reverse)",
 }
 GENERAL_PROTOCOL = (

@@ -17,8 +17,8 @@ fixed linear dynamics after the hysteresis (the baseline's ARX, a first-order la
 ``floor = None`` is the same element with a fixed stiffness (``s = 1``): a payload resonance that
 does not depend on the pressure, linear mechanics that the diagnosis treats as a yardstick.
 
-Identification, cheap enough for every record (about 1 s of CPU at 40 000 samples, the
-refitted hysteresis of the chosen element not counted):
+Identification, cheap enough for every record (``python bench/diagnose_bench.py --quick``: 40 000
+samples took 9.8 s of CPU against 8.3 s without the element):
 
 1. Equation error: ``y = x - (1 / w_top^2) y'' / s - (2 zeta / w_top) y' / sqrt(s)`` is linear in
    the Preisach masses and the two coefficients once ``y'``, ``y''`` are taken from the measured
@@ -27,8 +27,8 @@ refitted hysteresis of the chosen element not counted):
 2. Output error: the start's hysteresis output is simulated through the element for a small grid
    around each start (:data:`FREQUENCY_STEPS` x :data:`DAMPING_STEPS` at the start's floor, all
    trials of one lag in one vectorised pass), then for finer grids (:data:`ZOOMS`) around the
-   best; the whole-record RMSE of a gain and an offset picks the best pressure-dependent setting
-   and the best fixed one. Equation error alone is biased by the
+   best; the RMSE of a gain and an offset (on at most :data:`RANK_SAMPLES` from the middle of the
+   record) picks the best pressure-dependent setting and the best fixed one. Equation error alone is biased by the
    derivatives' noise and smoothing (a 2.4 Hz payload came out at 3.9-6 Hz).
 """
 
@@ -57,6 +57,9 @@ ZOOMS: tuple[tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]], ...
 )
 ZETA_RANGE = (0.03, 1.5)  # damping ratios tried
 MAX_FREQUENCY_SHARE = 0.25  # w_top / (2 pi) at most this share of the sample rate
+# trials are ranked on this many samples from the middle of the record (each pass over the
+# samples is a Python loop: on 40 000 samples the search cost 5 s of CPU)
+RANK_SAMPLES = 8000
 
 
 @dataclass(frozen=True)
@@ -175,6 +178,12 @@ def equation_error_starts(
     return starts, outputs
 
 
+def _window(n: int) -> slice:
+    """The samples trials are ranked on: at most :data:`RANK_SAMPLES` from the middle of the record."""
+    begin = max(0, (n - RANK_SAMPLES) // 2)
+    return slice(begin, min(n, begin + RANK_SAMPLES))
+
+
 def _ranked(
     trials: list[PayloadSetting],
     outputs: dict[float, NDArray[np.float64]],
@@ -182,26 +191,32 @@ def _ranked(
     y: NDArray[np.float64],
     dt: float,
 ) -> dict[bool, tuple[float, PayloadSetting]]:
-    """The best of ``trials`` by whole-record RMSE of a gain and an offset on its lag's hysteresis
-    output through the element (all trials of one lag in one pass): under key True the best with
-    a pressure-dependent stiffness, under False the best fixed one."""
+    """The best of ``trials`` by the RMSE of a gain and an offset on its lag's hysteresis output
+    through the element (every trial in one pass, on :func:`_window`'s samples, the first tenth of
+    them left to settle): under key True the best with a pressure-dependent stiffness, under False
+    the best fixed one."""
+    trials = [t for t in dict.fromkeys(trials) if t.lag_s in outputs]
+    if not trials:
+        return {}
+    window = _window(y.size)
+    y_w = y[window]
+    simulated = payload_follow(
+        np.column_stack([outputs[t.lag_s][window] for t in trials]),
+        dt,
+        np.column_stack([stiffness_ratio(p, t.floor)[window] for t in trials]),
+        np.array([t.w_top for t in trials]),
+        np.array([t.zeta for t in trials]),
+    )
+    scored = slice(y_w.size // 10, None)
+    regressors = np.ones((y_w.size - y_w.size // 10, 2))
     best: dict[bool, tuple[float, PayloadSetting]] = {}
-    ones = np.ones(y.size)
-    for lag_s, x in outputs.items():
-        group = [t for t in trials if t.lag_s == lag_s]
-        if not group:
-            continue
-        stiffness = np.column_stack([stiffness_ratio(p, t.floor) for t in group])
-        simulated = payload_follow(
-            x, dt, stiffness, np.array([t.w_top for t in group]), np.array([t.zeta for t in group])
-        )
-        for j, trial in enumerate(group):
-            regressors = np.column_stack([simulated[:, j], ones])
-            theta = np.linalg.lstsq(regressors, y, rcond=None)[0]
-            error = rmse(regressors @ theta, y)
-            key = trial.floor is not None
-            if np.isfinite(error) and (key not in best or error < best[key][0]):
-                best[key] = (error, trial)
+    for j, trial in enumerate(trials):
+        regressors[:, 0] = simulated[scored, j]
+        theta = np.linalg.lstsq(regressors, y_w[scored], rcond=None)[0]
+        error = rmse(regressors @ theta, y_w[scored])
+        key = trial.floor is not None
+        if np.isfinite(error) and (key not in best or error < best[key][0]):
+            best[key] = (error, trial)
     return best
 
 
@@ -232,10 +247,12 @@ def zoomed(
     """``best`` (per key: error and setting) improved on the finer grids of :data:`ZOOMS` in turn."""
     best = dict(best)
     for steps in ZOOMS:
-        for key, (error, setting) in list(best.items()):
-            finer = _ranked(_around(setting, steps, dt), outputs, p, y, dt).get(key)
-            if finer is not None and finer[0] < error:
-                best[key] = finer
+        finer = _ranked(
+            [t for _error, setting in best.values() for t in _around(setting, steps, dt)], outputs, p, y, dt
+        )
+        for key, found in finer.items():
+            if key in best and found[0] < best[key][0]:
+                best[key] = found
     return best
 
 

@@ -621,8 +621,9 @@ def limit_sentence(limits: dict[str, float | None]) -> str:
 
 TERMS = {
     "rate_dependence": "rate dependence: velocity-squared friction (y trails the rate-independent output by "
-    "alpha v|v|, form 0) or a rate-dependent hysteresis weight (loop width and stroke scaled by the input "
-    "speed, form 1)",
+    "alpha v|v|, form 0), a rate-dependent hysteresis weight (loop width and stroke scaled by the input "
+    "speed, form 1) or a payload on the muscle's pressure-dependent stiffness (y'' = w(p)^2 (x - y) - "
+    "2 zeta w(p) y', w(p)^2 = w_top^2 (p_n + floor) / (1 + floor), form 2)",
     "creep": "creep spectrum: first-order relaxations of the hysteresis output at 1-64 s, shares of one sign, "
     "y gets sum e_i*(lowpass(x, tau_i) - x)",
     "transport_delay": "dead time before the hysteresis: x(k - d), or x(k - d_rise) while the input rises and "
@@ -630,7 +631,8 @@ TERMS = {
     "load_dependence": "load terms: y gets e1*L + e2*L*x + e3*L*x^2 (curve) + e4*L*branch (loop width) + e5*L^2",
     "temperature_drift": "temperature terms: y gets e1*T + e2*T*x + e3*T*x^2 (curve) + e4*T*branch (loop width) "
     "+ e5*T^2, and f1*Tlag + f2*Tlag*x for T after each of a 3 s and a 10 s thermal lag",
-    "output_lag": "first-order lag after the hysteresis: y gets lag(x, tau)",
+    "output_lag": "mechanics after the hysteresis: a first-order lag, y gets lag(x, tau), or a payload on a "
+    "fixed stiffness, y'' = w^2 (x - y) - 2 zeta w y'",
     "slow_drift": "slow drift in time no column explains: y gets e1*t + e2*t*x + e3*t*x^2 (curve) + e4*t*branch "
     "(loop width) + e5*t^2",
 }
