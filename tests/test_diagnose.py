@@ -166,7 +166,10 @@ def test_a_measured_column_has_a_lower_floor_than_a_term_without_a_null_of_its_o
 def test_a_rate_term_that_a_linear_lag_explains_as_well_is_not_rate_dependence():
     rate = [0.38, 0.40, 0.37, 0.39]
     v = verdict(rate_dependence=rate, output_lag=[0.37, 0.39, 0.36, 0.38])
-    assert v.cause == "none" and "linear lag after the hysteresis explains as much" in v.reason
+    assert (
+        v.cause == "none"
+        and "linear mechanics after the hysteresis (a lag or a fixed payload) explain as much" in v.reason
+    )
     assert "baseline's dynamics are incomplete" in v.reason  # the lag itself is reported, not named
     assert verdict(rate_dependence=rate, output_lag=[0.10, 0.11, 0.09, 0.12]).cause == "rate_dependence"
     assert verdict(output_lag=[0.30, 0.31, 0.29, 0.30]).cause == "none"  # a yardstick is never the verdict

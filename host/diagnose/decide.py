@@ -85,7 +85,8 @@ SURROGATE_ALPHA = 0.1
 DRIFT_MARGIN = 0.03
 CONFOUNDED_R = 0.9
 PHYSICAL_CAUSES = tuple(c for c in CAUSES if c not in YARDSTICKS)
-# a speed-dependent term must gain this much more than a linear lag after the hysteresis
+# a speed-dependent term must gain this much more than linear mechanics after the hysteresis (a
+# first-order lag, a payload on a fixed stiffness: output_lag)
 LAG_MARGIN = 0.03
 # the named cause must gain this much more than every other term, yardsticks included
 DISTINCT_MARGIN = 0.03
@@ -267,12 +268,15 @@ def against_drift(s: CandidateScore, drift: CandidateScore) -> str | None:
 
 
 def against_lag(s: CandidateScore, lag: CandidateScore) -> str | None:
-    """None when a speed-dependent term explains more than a linear lag after the hysteresis by
-    :data:`LAG_MARGIN`: a loop width growing in proportion to speed *is* a first-order lag in
-    the small, so only what a linear lag cannot do is evidence of rate dependence."""
+    """None when a speed-dependent term explains more than linear mechanics after the hysteresis
+    (``output_lag``: a first-order lag or a payload on a fixed stiffness) by :data:`LAG_MARGIN`: a
+    loop width growing in proportion to speed *is* a first-order lag in the small, and a payload on
+    the muscle's stiffness is a fixed payload where the pressure changes little, so only what
+    linear mechanics cannot do is evidence of rate dependence."""
     if lag.gains and s.mean - lag.mean < LAG_MARGIN:
         return (
-            f"a linear lag after the hysteresis explains as much ({lag.mean:+.1%} vs {s.mean:+.1%}, "
+            f"linear mechanics after the hysteresis (a lag or a fixed payload) explain as much ({lag.mean:+.1%} vs "
+            f"{s.mean:+.1%}, "
             f"{LAG_MARGIN:.0%} more needed): the baseline lacks dynamics, not rate dependence"
         )
     return None
@@ -384,7 +388,8 @@ def choose(
         reason += f"; nor does a slow drift in time: {reasons['slow_drift']}"
     if lag is not None and reasons.get("output_lag") is None:
         reason += (
-            f"; a linear lag after the hysteresis gains {lag.mean:+.1%}: the baseline's dynamics are incomplete "
+            f"; linear mechanics after the hysteresis (a lag or a fixed payload) gain {lag.mean:+.1%}: the "
+            "baseline's dynamics are incomplete "
             "(mechanics between the muscle and the sensor), which is none of the effects"
         )
     return Verdict("none", reason, "no candidate passed", confidence, passing)

@@ -268,7 +268,16 @@ def refined(
     setting. A lightly damped payload has to be matched closely: on a 4 Hz payload with a damping
     ratio of 0.12, 2.5 % off in frequency left 20 times the error of the exact setting, and 0.114
     for 0.12 in damping five times. Under key True the best with a pressure-dependent stiffness,
-    under False the best fixed one (absent: no start of that kind)."""
-    coarse = [t for start in starts for t in _around(start, (FREQUENCY_STEPS, DAMPING_STEPS, (1.0,)), dt)]
+    under False the best fixed one (absent: no start)."""
+    # each start also at a fixed stiffness (its frequency at the mean stiffness), so that a
+    # pressure-dependent element always has its fixed twin to beat
+    twins = [
+        PayloadSetting(
+            start.lag_s, None, start.w_top * float(np.sqrt(np.mean(stiffness_ratio(p, start.floor)))), start.zeta
+        )
+        for start in starts
+        if start.floor is not None
+    ]
+    coarse = [t for start in starts + twins for t in _around(start, (FREQUENCY_STEPS, DAMPING_STEPS, (1.0,)), dt)]
     best = zoomed(_ranked(list(dict.fromkeys(coarse)), outputs, p, y, dt), outputs, p, y, dt)
     return {key: setting for key, (_error, setting) in best.items()}
