@@ -19,6 +19,7 @@ from tests.plants.blind7_family import blind7_cases, blind7_measurement
 from tests.plants.blind8_family import blind8_cases, blind8_measurement
 from tests.plants.blind9_family import blind9_cases, blind9_measurement
 from tests.plants.blind10_family import blind10_cases, blind10_measurement
+from tests.plants.blind11_family import blind11_cases, blind11_measurement
 from tests.plants.blind_family import blind_cases, blind_measurement
 from tests.plants.family import Case, measurement, tuning_cases
 from tests.plants.fresh_family import fresh_cases, fresh_measurement
@@ -39,6 +40,7 @@ FAMILIES: dict[str, tuple[Cases, Record]] = {
     "blind8": (blind8_cases, blind8_measurement),
     "blind9": (blind9_cases, blind9_measurement),
     "blind10": (blind10_cases, blind10_measurement),
+    "blind11": (blind11_cases, blind11_measurement),
 }
 
 
