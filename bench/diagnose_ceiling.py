@@ -1,6 +1,6 @@
 """Ceiling of ``pmactl diagnose`` on the test plants: which hidden effects could *any* candidate name?
 
-Usage: python bench/diagnose_ceiling.py [--set fresh,blind,...,blind10] [--duration S]
+Usage: python bench/diagnose_ceiling.py [--set fresh,blind,...,blind11] [--duration S]
        [--workers N] [--only TEXT] [--json OUT]      (default: --set blind4 --duration 100)
 
 For every effect record the plant family knows the effect's own noise-free waveform (the output

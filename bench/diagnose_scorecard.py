@@ -1,6 +1,6 @@
 """Scorecard of ``pmactl diagnose`` on the test plants: the tuning set and the fresh held-out set.
 
-Usage: python bench/diagnose_scorecard.py [--set tuning|fresh|blind|blind2|...|blind10|both|all]
+Usage: python bench/diagnose_scorecard.py [--set tuning|fresh|blind|blind2|...|blind11|both|all]
        [--duration S] [--only TEXT] [--json OUT]
 
 Prints one line per record (plant, effect:form, protocol, rate, verdict, confidence, held-out
@@ -19,8 +19,8 @@ blind5 and blind6 (tests/plants/blind5_family.py, blind6_family.py, built blind 
 v9 was scored on once each (blind5 before v9's thermal-lag terms, blind6 after), and blind7
 (tests/plants/blind7_family.py, built blind for v10) the set v10 was scored on once, blind8
 (built blind for v11) the set v11 was scored on once, blind9 (built blind for v12) the set
-v12 was scored on once (v12 kept v11's method), and blind10 (built blind for v13) the set v13
-was scored on once.
+v12 was scored on once (v12 kept v11's method), blind10 (built blind for v13) the set v13
+was scored on once, and blind11 (built blind for v14) the set v14 was scored on once.
 ``both`` is tuning + fresh; ``all`` adds the blind sets.
 """
 
