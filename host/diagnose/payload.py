@@ -25,11 +25,12 @@ samples took 9.8 s of CPU against 8.3 s without the element):
    output (Savitzky-Golay, :data:`DERIVATIVE_WINDOW_S`); fitted jointly with the hysteresis for
    each stiffness floor, it starts ``w_top`` and ``zeta`` (a negative coefficient: no such element).
 2. Output error: the start's hysteresis output is simulated through the element for a small grid
-   around each start (:data:`FREQUENCY_STEPS` x :data:`DAMPING_STEPS` at the start's floor, all
-   trials of one lag in one vectorised pass), then for finer grids (:data:`ZOOMS`) around the
-   best; the RMSE of a gain and an offset (on at most :data:`RANK_SAMPLES` from the middle of the
-   record) picks the best pressure-dependent setting and the best fixed one. Equation error alone is biased by the
-   derivatives' noise and smoothing (a 2.4 Hz payload came out at 3.9-6 Hz).
+   around each start (:data:`FREQUENCY_STEPS` x :data:`DAMPING_STEPS` at the start's floor and on
+   a fixed stiffness, every trial in one vectorised pass), then for finer grids (:data:`ZOOMS`)
+   around the best; the RMSE of a gain and an offset (on at most :data:`RANK_SAMPLES` from the
+   middle of the record) picks the best pressure-dependent setting and the best fixed one.
+   Equation error alone is biased by the derivatives' noise and smoothing (a 2.4 Hz payload of
+   blind9 came out at 2.7-6.0 Hz, depending on the floor).
 """
 
 from __future__ import annotations
