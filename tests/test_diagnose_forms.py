@@ -18,14 +18,7 @@ from host.data import Measurement
 from host.diagnose import run
 from host.diagnose.candidates import DELAY_RATIO, MIN_DELAY_SAMPLES, _lag_left, delay_grid
 from host.diagnose.features import first_order
-from tests.plants.pulses import muscle_stroke, pulse_pressure
-
-
-def _record(dt: float, pressure: np.ndarray, stroke: np.ndarray, name: str) -> Measurement:
-    rng = np.random.default_rng(11)
-    n = stroke.size
-    u = pressure + rng.normal(0.0, 0.002, n)
-    return Measurement(np.arange(n) * dt, u, stroke + rng.normal(0.0, 0.01, n), {}, source=name)
+from tests.plants.pulses import muscle_stroke, pulse_pressure, pulse_record
 
 
 def _diagnosed(m: Measurement):
@@ -64,7 +57,7 @@ def test_a_dead_time_of_six_samples_at_one_kilohertz_is_named():
     dt, pressure = pulse_pressure(1000.0, 25.0)
     stroke = muscle_stroke(pressure)
     late = np.r_[np.full(6, stroke[0]), stroke[:-6]]
-    d = _diagnosed(_record(dt, pressure, late, "6 ms dead time"))
+    d = _diagnosed(pulse_record(dt, pressure, late, "6 ms dead time"))
     assert d.cause == "transport_delay"
     assert d.extended_model is not None and d.extended_model["dead_time_s"] in (0.005, 0.007)
 
@@ -111,7 +104,7 @@ def test_a_viscoelastic_branch_is_named_rate_dependence(share, tau_s):
     the stroke shrinks and the loop opens with speed. The rate forms gain +2.5 % and +9.6 %."""
     dt, pressure = pulse_pressure(200.0, 60.0)
     stroke = _viscoelastic(muscle_stroke(pressure), dt, share, tau_s)
-    d = _diagnosed(_record(dt, pressure, stroke, "viscoelastic"))
+    d = _diagnosed(pulse_record(dt, pressure, stroke, "viscoelastic"))
     assert d.cause == "rate_dependence"
 
 
@@ -127,10 +120,10 @@ def test_a_drag_that_saturates_with_speed_is_named_rate_dependence():
     dt, pressure = pulse_pressure(200.0, 60.0)
     stroke = muscle_stroke(pressure)
     knee = 0.3 * float(np.percentile(np.abs(np.gradient(stroke, dt)), 95))
-    d = _diagnosed(_record(dt, pressure, _dragged(stroke, dt, 1.5, knee), "braked"))
+    d = _diagnosed(pulse_record(dt, pressure, _dragged(stroke, dt, 1.5, knee), "braked"))
     assert d.cause == "rate_dependence"
 
 
 def test_the_same_muscle_without_an_effect_is_none():
     dt, pressure = pulse_pressure(200.0, 60.0)
-    assert _diagnosed(_record(dt, pressure, muscle_stroke(pressure), "plain")).cause == "none"
+    assert _diagnosed(pulse_record(dt, pressure, muscle_stroke(pressure), "plain")).cause == "none"

@@ -14,7 +14,7 @@ import pytest
 from host.data import Measurement
 from host.diagnose import run
 from host.diagnose.payload import payload_follow, stiffness_ratio
-from tests.plants.pulses import muscle_stroke, pulse_pressure
+from tests.plants.pulses import muscle_stroke, pulse_pressure, pulse_record
 
 
 def _damped_step(t: np.ndarray, w: float, zeta: float) -> np.ndarray:
@@ -86,10 +86,7 @@ def _payload_record(floor: float | None, seed: int = 11) -> Measurement:
     (damping ratio 0.12), on a stiffness with ``floor`` (None: fixed)."""
     dt, pressure = pulse_pressure(200.0, 60.0)
     stroke = payload_follow(muscle_stroke(pressure), dt, stiffness_ratio(pressure, floor), 2.0 * np.pi * 4.0, 0.12)
-    rng = np.random.default_rng(seed)
-    n = stroke.size
-    u = pressure + rng.normal(0.0, 0.002, n)
-    return Measurement(np.arange(n) * dt, u, stroke + rng.normal(0.0, 0.01, n), {}, source=f"payload {floor}")
+    return pulse_record(dt, pressure, stroke, f"payload {floor}", seed)
 
 
 def _diagnosed(m: Measurement) -> run.Diagnosis:

@@ -66,6 +66,11 @@ MAX_FREQUENCY_SHARE = 0.25  # w_top / (2 pi) at most this share of the sample ra
 RANK_SAMPLES = 8000
 
 
+def _highest_w(dt: float) -> float:
+    """The highest natural frequency tried [rad/s]: :data:`MAX_FREQUENCY_SHARE` of the sample rate."""
+    return 2.0 * np.pi * MAX_FREQUENCY_SHARE / dt
+
+
 @dataclass(frozen=True)
 class PayloadSetting:
     """One element: the actuator lag of the rows it follows [s], the stiffness floor (None: fixed
@@ -164,7 +169,7 @@ def equation_error_starts(
     hysteresis output of its first fit (what step 2 simulates through the element)."""
     every = np.ones(y.size, dtype=bool)
     speed, acceleration = _derivatives(y, dt)
-    w_max = 2.0 * np.pi * MAX_FREQUENCY_SHARE / dt
+    w_max = _highest_w(dt)
     starts: list[PayloadSetting] = []
     outputs: dict[float, NDArray[np.float64]] = {}
     for lag_s, rows in rows_by_lag.items():
@@ -204,10 +209,11 @@ def _ranked(
         return {}
     window = _window(y.size)
     y_w = y[window]
+    stiffness = {floor: stiffness_ratio(p, floor)[window] for floor in {t.floor for t in trials}}
     simulated = payload_follow(
         np.column_stack([outputs[t.lag_s][window] for t in trials]),
         dt,
-        np.column_stack([stiffness_ratio(p, t.floor)[window] for t in trials]),
+        np.column_stack([stiffness[t.floor] for t in trials]),
         np.array([t.w_top for t in trials]),
         np.array([t.zeta for t in trials]),
     )
@@ -228,7 +234,7 @@ def _around(
     setting: PayloadSetting, steps: tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]], dt: float
 ) -> list[PayloadSetting]:
     """Settings around ``setting``: its frequency, damping ratio and floor times each factor of ``steps``."""
-    w_max = 2.0 * np.pi * MAX_FREQUENCY_SHARE / dt
+    w_max = _highest_w(dt)
     frequency_steps, damping_steps, floor_steps = steps
     floors = [None] if setting.floor is None else [setting.floor * f for f in floor_steps]
     return [

@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from edge.hysteresis.pi import play_outputs
+from host.data import Measurement
 from host.diagnose.features import first_order
 
 Array = NDArray[np.float64]
@@ -38,3 +39,12 @@ def muscle_stroke(pressure: Array) -> Array:
     """The rate-independent stroke [mm]: three plays (0.1, 0.35, 0.8 bar) and ``2 p^1.3``."""
     plays = play_outputs(pressure, np.array([0.1, 0.35, 0.8]), np.full(3, pressure[0]))
     return np.asarray(6.0 * plays.sum(axis=1) + 2.0 * pressure**1.3, dtype=np.float64)
+
+
+def pulse_record(dt: float, pressure: Array, stroke: Array, name: str, seed: int = 11) -> Measurement:
+    """The recording of ``stroke`` [mm] driven by ``pressure`` [bar]: the pressure read with 2 mbar
+    and the stroke with 10 um of white noise (seeded by ``seed``)."""
+    rng = np.random.default_rng(seed)
+    n = stroke.size
+    u = pressure + rng.normal(0.0, 0.002, n)
+    return Measurement(np.arange(n) * dt, u, stroke + rng.normal(0.0, 0.01, n), {}, source=name)
