@@ -1,4 +1,4 @@
-"""``pmactl edge run`` and ``pmactl edge telemetry``: the runtime from the command line.
+"""``pmactl edge run``, ``record`` and ``telemetry``: the runtime from the command line.
 
 Nothing here imports ``host``, ``hil``, scipy, matplotlib or torch (``--plot`` imports
 matplotlib when asked), so the SBC runs the loop with only ``pmactl[edge]``: as
@@ -12,11 +12,13 @@ import argparse
 import json
 import signal
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TypeVar
 
 from edge.errors import DataError, PmactlError
 
+T = TypeVar("T")
 DEFAULT_REFERENCE = "sine:amplitude=30,frequency=0.2,offset=40"
 
 
@@ -46,6 +48,34 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     erun.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     erun.set_defaults(run=run)
+    erec = edge_sub.add_parser(
+        "record",
+        help="open-loop excitation on the rig, recorded as the CSV pmactl fit / train / diagnose / identify read",
+    )
+    erec.add_argument("--config", required=True, metavar="RIG.toml", help="rig config (docs/examples/*.toml)")
+    erec.add_argument(
+        "--protocol",
+        required=True,
+        metavar="NAME",
+        help="triangles (seed 000) | forc (seed 003, for a Preisach fit) | sines | steps | multisine | chirp, "
+        "optionally NAME:key=value,... (lists with /), or FILE.csv with columns t,<command>",
+    )
+    erec.add_argument("--out", required=True, metavar="RUN.csv", help="the recording to create (+ RUN.meta.json)")
+    erec.add_argument(
+        "--range",
+        metavar="LOW:HIGH",
+        help="command range: bar (default 0:4, seed 000), or commanded deg on a joint (default -30:30); "
+        "within the config's limits",
+    )
+    erec.add_argument(
+        "--duration", type=float, metavar="S", help="seconds to record, repeating the protocol (default: one pass)"
+    )
+    erec.add_argument(
+        "--sample-hz", type=float, metavar="HZ", help="CSV rows per second; divides the loop rate (default 100)"
+    )
+    erec.add_argument("--telemetry", metavar="FILE", help="also write per-tick telemetry (as edge run --telemetry)")
+    erec.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    erec.set_defaults(run=record)
     etel = edge_sub.add_parser("telemetry", help="summarise a telemetry file; export CSV, MCAP or a plot")
     etel.add_argument("file", metavar="FILE", help="telemetry written by pmactl edge run --telemetry")
     etel.add_argument("--csv", metavar="OUT.csv", help="write every telemetry row as CSV here")
@@ -79,15 +109,7 @@ def run(args: argparse.Namespace) -> int:
         settle_s=args.settle,
     )
 
-    def request_stop(*_: object) -> None:
-        runtime.stop_requested.set()
-
-    previous = {sig: signal.signal(sig, request_stop) for sig in (signal.SIGTERM, signal.SIGINT)}
-    try:
-        summary = runtime.run(args.duration)
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
+    summary = _run_stoppable(runtime, lambda: runtime.run(args.duration))
     result = summary.as_dict()
     if args.json:
         print(json.dumps(result), flush=True)
@@ -96,6 +118,67 @@ def run(args: argparse.Namespace) -> int:
     for fault in summary.faults:
         print(f"pmactl edge: FAULT: {fault} (valve vented)", file=sys.stderr)
     return 1 if summary.faults else 0
+
+
+def _run_stoppable(runtime: object, body: Callable[[], T]) -> T:
+    """``body()`` with SIGTERM and SIGINT asking ``runtime`` to stop (it vents and ends cleanly)."""
+
+    def request_stop(*_: object) -> None:
+        runtime.stop_requested.set()  # type: ignore[attr-defined]
+
+    previous = {sig: signal.signal(sig, request_stop) for sig in (signal.SIGTERM, signal.SIGINT)}
+    try:
+        return body()
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def record(args: argparse.Namespace) -> int:
+    from edge.runtime import record as recording
+    from edge.runtime.config import load_config
+
+    config = load_config(args.config)
+    if args.telemetry and "{time}" not in args.telemetry and Path(args.telemetry).exists():
+        raise DataError(f"{args.telemetry}: exists, and a run never overwrites another; choose a new path")
+    runtime, recorder = recording.record(
+        config,
+        args.protocol,
+        args.out,
+        range_text=args.range,
+        duration_s=args.duration,
+        sample_hz=args.sample_hz,
+        telemetry_path=args.telemetry,
+    )
+    result = _run_stoppable(runtime, lambda: recording.finish(runtime, recorder))
+    data = result.as_dict()
+    if args.json:
+        print(json.dumps(data), flush=True)
+    else:
+        unit, y_unit = result.unit, config.rig.output_unit
+        last = f"t 0..{result.last_t:.2f} s" if result.rows else "nothing"
+        print(
+            f"{result.rows} rows ({last}) at {result.sample_hz:g} Hz to {result.csv} (+ {data['meta']}); "
+            f"protocol {args.protocol} on {result.command_range[0]:g}..{result.command_range[1]:g} {unit}"
+        )
+        print(
+            f"columns: {', '.join(c.name for c in recorder.columns)}; u = "
+            f"{recorder.columns[1].meaning} [{unit}], y = {recorder.columns[2].meaning} [{y_unit}]"
+        )
+        lateness = result.summary.lateness
+        print(
+            f"{lateness['ticks']:.0f} ticks, overruns {lateness['overruns']:.0f}, lateness p99 "
+            f"{lateness['lateness_p99_us']:.0f} us; ticks with a device error {data['bus_errors']}"
+        )
+        if result.rows and not result.summary.faults:
+            print(f"next: pmactl fit --model preisach --train {result.csv} --units {unit},{y_unit} --save BUNDLE_DIR")
+    for fault in result.summary.faults:
+        print(
+            f"pmactl edge: FAULT: {fault} (valve vented); {result.rows} rows up to "
+            f"t={result.last_t:.3f} s kept in {result.csv}",
+            file=sys.stderr,
+        )
+    return 1 if result.summary.faults else 0
 
 
 def _print_summary(result: dict[str, object]) -> None:

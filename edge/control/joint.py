@@ -167,7 +167,15 @@ class JointController:
             return math.nan
         if commanded != commanded:
             commanded = self.pid.step(reference, y, dt, feedforward)
-        p_a, p_b = self.statics(commanded)
+        p_a, p_b = self.valves(commanded, dt)
+        frame.reference_deg, frame.u_ff_deg, frame.u_fb_deg = reference, feedforward, commanded - feedforward
+        frame.u_bar, frame.valve_b_bar = p_a, p_b
+        return p_a
+
+    def valves(self, commanded_deg: float, dt: float) -> tuple[float, float]:
+        """Steps 3 and 4 of the module docstring: the two valve commands [bar] for the commanded
+        angle [deg] after a tick of ``dt`` [s], kept as the latest commands."""
+        p_a, p_b = self.statics(commanded_deg)
         lim = self.limits
         step = lim.slew_bar_per_s * dt
         last_a, last_b = self._last_bar, self._last_b_bar
@@ -178,6 +186,4 @@ class JointController:
         p_a = min(max(p_a, lim.pressure_min_bar), lim.pressure_max_bar)
         p_b = min(max(p_b, lim.pressure_min_bar), lim.pressure_max_bar)
         self._last_bar, self._last_b_bar, self._last_diff_bar = p_a, p_b, 0.5 * (p_a - p_b)
-        frame.reference_deg, frame.u_ff_deg, frame.u_fb_deg = reference, feedforward, commanded - feedforward
-        frame.u_bar, frame.valve_b_bar = p_a, p_b
-        return p_a
+        return p_a, p_b

@@ -34,7 +34,7 @@ from edge.runtime.rig import Rig, open_rig
 from edge.runtime.rigspec import ANALOG_IN
 from edge.runtime.safety import SAFE_CODE, STATE_CODES, Fault, State, Supervisor
 from edge.runtime.scheduler import RealtimeSettings, TickScheduler, apply_realtime
-from edge.runtime.telemetry import TelemetryWriter
+from edge.runtime.telemetry import RingWriter, TelemetryWriter
 
 SPIN_S = 300e-6  # poll the clock for the last 300 us before a deadline (wall clock only)
 PHASES = ("read", "control", "write", "log", "cpu")  # wall ns per phase; "cpu": thread CPU ns of control + log
@@ -164,6 +164,10 @@ class EdgeRuntime:
         profile: record per-phase wall time of every tick (``phase_ns``); ``"cpu"`` also the
             thread CPU time of the compute phases (its clock calls inflate the wall phases).
         rig: an already opened rig (default: open the one the config names).
+        controller: the control law (default: the bundle's feedforward + PID); ``pmactl edge
+            record`` passes an open-loop one (:mod:`edge.control.openloop`).
+        recorder: a further per-tick sink (the recording CSV, :mod:`edge.runtime.recorder`);
+            like telemetry, a write failure is a fault.
     """
 
     def __init__(
@@ -178,6 +182,8 @@ class EdgeRuntime:
         settle_s: float = 0.0,
         profile: bool | str = False,
         rig: Rig | None = None,
+        controller: Controller | JointController | None = None,
+        recorder: RingWriter | None = None,
     ) -> None:
         self.config, self.bundle, self.reference = config, bundle, reference
         spec = config.rig
@@ -193,7 +199,9 @@ class EdgeRuntime:
         inverse = bundle.inverse if feedforward and bundle is not None else None
         limits = Limits(c.pressure_min_bar, c.pressure_max_bar, c.slew_bar_per_s)
         self.controller: Controller | JointController
-        if spec.is_joint:
+        if controller is not None:
+            self.controller = controller
+        elif spec.is_joint:
             j = config.joint
             gains = PIDGains(j.kp, j.ki_per_s, j.kd_s, j.derivative_filter_s)
             self.controller = JointController(reference, gains, j, inverse, limits, j.feedback == "through_model")
@@ -226,6 +234,7 @@ class EdgeRuntime:
         self.stop_requested = threading.Event()
         self._device_error_ticks = 0  # ticks on which some device reported an error
         self.telemetry: TelemetryWriter | None = None  # the open writer while running
+        self.recorder = recorder
         self.on_tick: list[Callable[[float], None]] = []  # run before each tick's read (tests inject faults)
 
     def _header(self) -> dict[str, object]:
@@ -277,6 +286,8 @@ class EdgeRuntime:
         self.telemetry = telemetry
         if telemetry is not None:
             telemetry.bind(self.layout.bytes_view(self.frame))
+        if self.recorder is not None:
+            self.recorder.bind(self.layout.bytes_view(self.frame))
         realtime = RealtimeSettings(notes=["lockstep (simulated clock)"] if rig.lockstep else ["real-time disabled"])
         watchdog = None
         faults: list[str] = []
@@ -353,6 +364,8 @@ class EdgeRuntime:
         rig, supervisor, period, frame = self.rig, self.supervisor, self.config.period_s, self.frame
         read, step, write, prepare = rig.read, supervisor.step, rig.write, rig.prepare
         record = telemetry.record_bound if telemetry is not None else None
+        recorder = self.recorder
+        record_csv = recorder.record_bound if recorder is not None else None
         phase, profile, settle = self.phase_ns, self.profile, self.settle_s
         clock_ns, cpu_ns = time.perf_counter_ns, time.thread_time_ns
         timed_cpu = profile == "cpu"  # the CPU clock calls inflate the wall phases: a separate run
@@ -378,6 +391,8 @@ class EdgeRuntime:
                     supervisor.trip(frame, Fault.WATCHDOG, f"loop stalled for {watchdog.fired_after_s * 1e3:.0f} ms")
                 elif telemetry is not None and telemetry.failure is not None:
                     supervisor.trip(frame, Fault.TELEMETRY, telemetry.failure)
+                elif recorder is not None and recorder.failure is not None:
+                    supervisor.trip(frame, Fault.TELEMETRY, recorder.failure)
                 else:
                     step(frame, period)
                 t2 = clock_ns()
@@ -398,6 +413,8 @@ class EdgeRuntime:
                             max_abs = error
                 if record is not None:
                     record()
+                if record_csv is not None:
+                    record_csv()
                 if supervisor._bus_errors != streak:
                     streak = supervisor._bus_errors
                     if streak:

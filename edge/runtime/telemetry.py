@@ -39,7 +39,125 @@ def events_path(path: str | Path) -> Path:
     return Path(f"{path}.events.jsonl")
 
 
-class TelemetryWriter:
+class RingWriter:
+    """A bounded ring the tick copies its frame into, drained by a thread every
+    ``flush_interval_s``: the template of :class:`TelemetryWriter` and of the recording CSV
+    (:mod:`edge.runtime.recorder`). A subclass opens its files, calls :meth:`_start_ring`, and
+    implements :meth:`_write_rows` (a chunk of finished rows), :meth:`_after_drain` (flush,
+    events) and :meth:`_close_files`."""
+
+    path: Path
+    dropped: int
+    written: int
+    failure: str | None
+
+    def _start_ring(self, dtype: np.dtype, ring_ticks: int, flush_interval_s: float) -> None:
+        self.dtype = dtype
+        self._ring = np.zeros(ring_ticks, dtype=dtype)
+        self._base = self._ring.ctypes.data
+        self._ring_bytes = self._ring.view(np.uint8).data
+        self._source: memoryview | None = None
+        self._row_bytes = dtype.itemsize
+        self._size = ring_ticks
+        self._head = 0  # rows the tick has written (monotonic)
+        self._tail = 0  # rows the writer has taken
+        self.dropped = 0
+        self.written = 0
+        self._stop = threading.Event()
+        self._interval = flush_interval_s
+        self._thread = threading.Thread(target=self._run, name=f"pmactl-{type(self).__name__}", daemon=True)
+        self._thread.start()
+
+    # tick side --------------------------------------------------------------------------------
+    def record(self, frame: Any) -> None:
+        """Copy one tick's frame (a ctypes row of :attr:`dtype`) into the ring. Never blocks."""
+        ctypes.memmove(
+            self._base + (self._head % self._size) * self._row_bytes, ctypes.addressof(frame), self._row_bytes
+        )
+        self._head += 1
+
+    def bind(self, frame_bytes: memoryview) -> None:
+        """The frame :meth:`record_bound` copies (its bytes, ``FrameLayout.bytes_view``)."""
+        if len(frame_bytes) != self._row_bytes:
+            raise ValueError(f"frame of {len(frame_bytes)} bytes, rows of {self._row_bytes}")
+        self._source = frame_bytes
+
+    def record_bound(self) -> None:
+        """Copy the bound frame into the ring (a slice copy: ~0.3 us). Never blocks."""
+        start = (self._head % self._size) * self._row_bytes
+        self._ring_bytes[start : start + self._row_bytes] = self._source  # type: ignore[assignment]
+        self._head += 1
+
+    def record_array(self, row: np.ndarray) -> None:
+        """Store one row given as a numpy structured scalar/array of :attr:`dtype`."""
+        self._ring[self._head % self._size] = row
+        self._head += 1
+
+    # writer side ------------------------------------------------------------------------------
+    def _run(self) -> None:
+        while not self._stop.wait(self._interval) and self.failure is None:
+            self._drain()
+
+    def _fail(self, exc: OSError) -> None:
+        if self.failure is None:
+            self.failure = (
+                f"{self._what} write to {self.path} failed ({exc.strerror or exc}); rows from here on are lost"
+            )
+
+    _what = "telemetry"
+
+    def _drain(self) -> None:
+        if self.failure is not None:
+            return
+        head = self._head
+        if head - self._tail > self._size:
+            self.dropped += head - self._tail - self._size
+            self._tail = head - self._size
+        start, stop = self._tail % self._size, head % self._size
+        try:
+            if head > self._tail:
+                if start < stop:
+                    chunk = self._ring[start:stop].copy()
+                else:
+                    chunk = np.concatenate([self._ring[start:], self._ring[:stop]])
+                self._write_rows(chunk)
+                self.written += len(chunk)
+                self._tail = head
+            self._after_drain()
+        except OSError as exc:
+            self._fail(exc)
+
+    def _write_rows(self, chunk: np.ndarray) -> None:
+        raise NotImplementedError
+
+    def _after_drain(self) -> None:
+        raise NotImplementedError
+
+    def _close_files(self) -> None:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        """Stop the writer, write every remaining row, fsync and close (as far as the disk lets)."""
+        if self._stop.is_set():
+            return
+        self._stop.set()
+        self._thread.join()
+        self._drain()
+        self._close_files()
+
+    def _sync_close(self, handle: Any) -> None:
+        try:
+            handle.flush()
+            os.fsync(handle.fileno())
+        except OSError as exc:
+            self._fail(exc)
+        try:
+            handle.close()
+        except OSError as exc:  # a buffered write that still cannot go out
+            self._fail(exc)
+
+
+class TelemetryWriter(RingWriter):
     """Ring buffer + writer thread (see module docstring).
 
     Args:
@@ -79,24 +197,11 @@ class TelemetryWriter:
             self.path.unlink()
             raise DataError(f"{events_path(self.path)}: cannot create the event log ({exc.strerror})") from exc
         self.dtype = dtype
-        self._ring = np.zeros(ring_ticks, dtype=dtype)
-        self._base = self._ring.ctypes.data
-        self._ring_bytes = self._ring.view(np.uint8).data
-        self._source: memoryview | None = None
-        self._row_bytes = dtype.itemsize
-        self._size = ring_ticks
-        self._head = 0  # rows the tick has written (monotonic)
-        self._tail = 0  # rows the writer has taken
-        self.dropped = 0
-        self.written = 0
-        self.failure: str | None = None  # set once when a write fails (the runtime trips on it)
+        self.failure = None  # set once when a write fails (the runtime trips on it)
         self._events: list[str] = []
         self._lock = threading.Lock()  # guards _events only; the ring is single-producer
         self._write_header(header)
-        self._stop = threading.Event()
-        self._interval = flush_interval_s
-        self._thread = threading.Thread(target=self._run, name="pmactl-telemetry", daemon=True)
-        self._thread.start()
+        self._start_ring(dtype, ring_ticks, flush_interval_s)
 
     def _write_header(self, header: dict[str, object]) -> None:
         meta = {"columns": list(self.dtype.names or ()), "dtype": self.dtype.descr, **header}
@@ -106,89 +211,28 @@ class TelemetryWriter:
         except OSError as exc:
             self._fail(exc)
 
-    # tick side --------------------------------------------------------------------------------
-    def record(self, frame: Any) -> None:
-        """Copy one tick's frame (a ctypes row of :attr:`dtype`) into the ring. Never blocks."""
-        ctypes.memmove(
-            self._base + (self._head % self._size) * self._row_bytes, ctypes.addressof(frame), self._row_bytes
-        )
-        self._head += 1
-
-    def bind(self, frame_bytes: memoryview) -> None:
-        """The frame :meth:`record_bound` copies (its bytes, ``FrameLayout.bytes_view``)."""
-        if len(frame_bytes) != self._row_bytes:
-            raise ValueError(f"frame of {len(frame_bytes)} bytes, rows of {self._row_bytes}")
-        self._source = frame_bytes
-
-    def record_bound(self) -> None:
-        """Copy the bound frame into the ring (a slice copy: ~0.3 us). Never blocks."""
-        start = (self._head % self._size) * self._row_bytes
-        self._ring_bytes[start : start + self._row_bytes] = self._source  # type: ignore[assignment]
-        self._head += 1
-
-    def record_array(self, row: np.ndarray) -> None:
-        """Store one row given as a numpy structured scalar/array of :attr:`dtype`."""
-        self._ring[self._head % self._size] = row
-        self._head += 1
-
     def event(self, t: float, kind: str, text: str, **extra: object) -> None:
         """A state change, fault or note, written within one flush interval."""
         line = json.dumps({"t": round(t, 6), "kind": kind, "text": text, **extra})
         with self._lock:
             self._events.append(line)
 
-    # writer side ------------------------------------------------------------------------------
-    def _run(self) -> None:
-        while not self._stop.wait(self._interval) and self.failure is None:
-            self._drain()
+    def _write_rows(self, chunk: np.ndarray) -> None:
+        self._file.write(chunk.tobytes())
 
-    def _fail(self, exc: OSError) -> None:
-        if self.failure is None:
-            self.failure = f"telemetry write to {self.path} failed ({exc.strerror or exc}); rows from here on are lost"
+    def _after_drain(self) -> None:
+        self._file.flush()
+        with self._lock:
+            events, self._events = self._events, []
+        if events:
+            self._events_file.write("\n".join(events) + "\n")
+            self._events_file.flush()
 
-    def _drain(self) -> None:
-        if self.failure is not None:
-            return
-        head = self._head
-        if head - self._tail > self._size:
-            self.dropped += head - self._tail - self._size
-            self._tail = head - self._size
-        start, stop = self._tail % self._size, head % self._size
-        try:
-            if head > self._tail:
-                if start < stop:
-                    chunk = self._ring[start:stop].copy()
-                else:
-                    chunk = np.concatenate([self._ring[start:], self._ring[:stop]])
-                self._file.write(chunk.tobytes())
-                self.written += len(chunk)
-                self._tail = head
-            self._file.flush()
-            with self._lock:
-                events, self._events = self._events, []
-            if events:
-                self._events_file.write("\n".join(events) + "\n")
-                self._events_file.flush()
-        except OSError as exc:
-            self._fail(exc)
-
-    def close(self) -> None:
-        """Stop the writer, write every remaining row and event, fsync (as far as the disk lets)."""
+    def _close_files(self) -> None:
         if self._file.closed:
             return
-        self._stop.set()
-        self._thread.join()
-        self._drain()
         for handle in (self._file, self._events_file):
-            try:
-                handle.flush()
-                os.fsync(handle.fileno())
-            except OSError as exc:
-                self._fail(exc)
-            try:
-                handle.close()
-            except OSError as exc:  # a buffered write that still cannot go out
-                self._fail(exc)
+            self._sync_close(handle)
 
 
 def read_telemetry(path: str | Path) -> Any:
