@@ -14,9 +14,12 @@ import signal
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 from edge.errors import DataError, PmactlError
+
+if TYPE_CHECKING:
+    from edge.runtime.run import EdgeRuntime
 
 T = TypeVar("T")
 DEFAULT_REFERENCE = "sine:amplitude=30,frequency=0.2,offset=40"
@@ -109,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
         settle_s=args.settle,
     )
 
-    summary = _run_stoppable(runtime, lambda: runtime.run(args.duration))
+    summary = _run_stoppable(runtime, lambda: runtime.run(args.duration), f"running {args.reference}", args.json)
     result = summary.as_dict()
     if args.json:
         print(json.dumps(result), flush=True)
@@ -120,16 +123,26 @@ def run(args: argparse.Namespace) -> int:
     return 1 if summary.faults else 0
 
 
-def _run_stoppable(runtime: object, body: Callable[[], T]) -> T:
-    """``body()`` with SIGTERM and SIGINT asking ``runtime`` to stop (it vents and ends cleanly)."""
+def _run_stoppable(runtime: EdgeRuntime, body: Callable[[], T], what: str, json_output: bool) -> T:
+    """``body()`` with SIGTERM and SIGINT asking ``runtime`` to stop (it vents and ends cleanly)
+    and, for a person at a terminal, how to stop and a status line a second."""
+    from edge.runtime.status import StatusLine, describe_frame, wants_status
 
     def request_stop(*_: object) -> None:
-        runtime.stop_requested.set()  # type: ignore[attr-defined]
+        runtime.stop_requested.set()
 
+    status = None
+    if wants_status(json_output):
+        spec = runtime.config.rig
+        status = StatusLine(lambda: describe_frame(runtime.frame, spec.output_field, spec.output_unit, runtime.errors))
     previous = {sig: signal.signal(sig, request_stop) for sig in (signal.SIGTERM, signal.SIGINT)}
     try:
+        if status is not None:
+            status.start(what)
         return body()
     finally:
+        if status is not None:
+            status.stop()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
 
@@ -150,7 +163,9 @@ def record(args: argparse.Namespace) -> int:
         sample_hz=args.sample_hz,
         telemetry_path=args.telemetry,
     )
-    result = _run_stoppable(runtime, lambda: recording.finish(runtime, recorder))
+    result = _run_stoppable(
+        runtime, lambda: recording.finish(runtime, recorder), f"recording {args.protocol} to {args.out}", args.json
+    )
     data = result.as_dict()
     if args.json:
         print(json.dumps(data), flush=True)

@@ -8,8 +8,8 @@ valve commands); ``y`` the contraction [mm] (joint: angle [deg]); ``p`` the meas
 ``u1``/``u2`` the valve commands and ``p1``/``p2`` the muscle pressures [bar]. The units, which
 column is ``u`` and how the run ended go into ``<name>.meta.json`` beside it.
 
-Like telemetry, the tick copies its frame into a ring (every ``every``-th tick: the CSV is
-sampled at ``loop rate / every``) and a thread appends rows and flushes every
+Like telemetry, the tick copies its frame into a ring (the first tick at or after every
+``every`` periods: the CSV is sampled at ``loop rate / every``) and a thread appends rows and flushes every
 ``flush_interval_s``, so a fault or a killed process loses at most that much. Only ticks that
 commanded the protocol are written (the tick that vents is not), and a tick whose sensors could
 not be read (NaN) is skipped and counted in ``skipped``.
@@ -123,7 +123,9 @@ class CsvRecorder(RingWriter):
         except OSError as exc:
             raise DataError(f"--out {self.path}: cannot write it ({exc.strerror}); choose a writable path") from exc
         self._fields = [c.field for c in self.columns]
-        self._every, self._count = every, 0
+        self._every, self._next_t = every, 0.0
+        self._frame: Any = None
+        self._sample_s = self._half_tick = 0.0
         try:
             self._write_meta(complete=False)
         except DataError:
@@ -131,12 +133,19 @@ class CsvRecorder(RingWriter):
             raise
         self._start_ring(dtype, ring_ticks, flush_interval_s)
 
+    def bind_frame(self, frame: Any, period_s: float) -> None:
+        """The frame (a ctypes row) :meth:`record_bound` samples, and the loop's period [s]."""
+        self.bind(memoryview(frame).cast("B"))
+        self._frame, self._sample_s = frame, self._every * period_s
+        self._half_tick = 0.5 * period_s
+
     def record_bound(self) -> None:
-        """Every ``every``-th tick, copy the bound frame into the ring. Never blocks."""
-        count = self._count
-        self._count = count + 1
-        if count % self._every == 0:
+        """Copy the bound frame into the ring on the first tick at or after each sample time
+        (a tick skipped by an overrun moves that row to the next tick, with its true ``t``)."""
+        t = self._frame.t
+        if t + self._half_tick >= self._next_t:
             RingWriter.record_bound(self)
+            self._next_t += self._sample_s * (1 + int((t + self._half_tick - self._next_t) // self._sample_s))
 
     def _write_rows(self, chunk: np.ndarray) -> None:
         chunk = chunk[chunk["state"] == RUNNING_CODE]

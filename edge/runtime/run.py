@@ -30,15 +30,17 @@ from edge.errors import BusError, DataError
 from edge.runtime.bundle import Bundle
 from edge.runtime.config import RigConfig
 from edge.runtime.frame import frame_layout
+from edge.runtime.recorder import CsvRecorder
 from edge.runtime.rig import Rig, open_rig
 from edge.runtime.rigspec import ANALOG_IN
 from edge.runtime.safety import SAFE_CODE, STATE_CODES, Fault, State, Supervisor
 from edge.runtime.scheduler import RealtimeSettings, TickScheduler, apply_realtime
-from edge.runtime.telemetry import RingWriter, TelemetryWriter
+from edge.runtime.telemetry import TelemetryWriter
 
 SPIN_S = 300e-6  # poll the clock for the last 300 us before a deadline (wall clock only)
 PHASES = ("read", "control", "write", "log", "cpu")  # wall ns per phase; "cpu": thread CPU ns of control + log
 RUNNING_CODE = STATE_CODES[State.RUNNING]
+PUBLISH_S = 0.2  # how often the loop copies its running error sums to ``EdgeRuntime.errors``
 
 
 @dataclass
@@ -183,7 +185,7 @@ class EdgeRuntime:
         profile: bool | str = False,
         rig: Rig | None = None,
         controller: Controller | JointController | None = None,
-        recorder: RingWriter | None = None,
+        recorder: CsvRecorder | None = None,
     ) -> None:
         self.config, self.bundle, self.reference = config, bundle, reference
         spec = config.rig
@@ -236,6 +238,7 @@ class EdgeRuntime:
         self.telemetry: TelemetryWriter | None = None  # the open writer while running
         self.recorder = recorder
         self.on_tick: list[Callable[[float], None]] = []  # run before each tick's read (tests inject faults)
+        self.errors = ErrorStats()  # the running tracking-error sums (a status line reads them)
 
     def _header(self) -> dict[str, object]:
         spec = self.config.rig
@@ -287,11 +290,11 @@ class EdgeRuntime:
         if telemetry is not None:
             telemetry.bind(self.layout.bytes_view(self.frame))
         if self.recorder is not None:
-            self.recorder.bind(self.layout.bytes_view(self.frame))
+            self.recorder.bind_frame(self.frame, config.period_s)
         realtime = RealtimeSettings(notes=["lockstep (simulated clock)"] if rig.lockstep else ["real-time disabled"])
         watchdog = None
         faults: list[str] = []
-        errors = ErrorStats()
+        errors = self.errors = ErrorStats()  # published every PUBLISH_S while running (status line)
         scheduler = TickScheduler(rig.clock, period, spin_s=0.0 if rig.lockstep else SPIN_S)
         frozen = False
         try:
@@ -373,6 +376,8 @@ class EdgeRuntime:
         reference_field, output_field = f"reference_{self.unit}", self.config.rig.output_field
         tick = 0
         streak = 0
+        publish_every = max(1, int(round(PUBLISH_S / period)))
+        next_publish = publish_every
         count, sum_sq, sum_abs, max_abs = errors.count, errors.sum_sq, errors.sum_abs, errors.max_abs
         stop = self.stop_requested
         try:
@@ -425,6 +430,9 @@ class EdgeRuntime:
                     t4 = clock_ns()
                     phase[tick] = (t1 - t0, t2 - t1, t3 - t2, t4 - t3, (c2 - c1) + (cpu_ns() - c3) if timed_cpu else 0)
                 tick += 1
+                if tick >= next_publish:  # for a status line in another thread
+                    errors.count, errors.sum_sq, errors.sum_abs, errors.max_abs = count, sum_sq, sum_abs, max_abs
+                    next_publish = tick + publish_every
                 if watchdog is not None:
                     watchdog.heartbeat = time.monotonic()
                 if frame.state == SAFE_CODE:
