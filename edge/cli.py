@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import signal
 import sys
 from collections.abc import Callable, Sequence
@@ -79,6 +80,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     erec.add_argument("--telemetry", metavar="FILE", help="also write per-tick telemetry (as edge run --telemetry)")
     erec.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     erec.set_defaults(run=record)
+    eprobe = edge_sub.add_parser(
+        "probe", help="read every input with the valve disabled (wiring check); --calibrate a channel"
+    )
+    eprobe.add_argument("--config", required=True, metavar="RIG.toml", help="rig config (docs/examples/*.toml)")
+    eprobe.add_argument("--rate", type=float, metavar="HZ", help="reads per second (default: the config's loop rate)")
+    eprobe.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: at Ctrl-C)")
+    eprobe.add_argument(
+        "--calibrate",
+        metavar="CHANNEL",
+        help="two-point calibration: type two known values; prints the scale and zero lines for the config",
+    )
+    eprobe.add_argument(
+        "--average", type=float, default=0.5, metavar="S", help="seconds of readings per calibration point"
+    )
+    eprobe.add_argument("--json", action="store_true", help="print what was read as one JSON object at the end")
+    eprobe.set_defaults(run=probe)
     etel = edge_sub.add_parser("telemetry", help="summarise a telemetry file; export CSV, MCAP or a plot")
     etel.add_argument("file", metavar="FILE", help="telemetry written by pmactl edge run --telemetry")
     etel.add_argument("--csv", metavar="OUT.csv", help="write every telemetry row as CSV here")
@@ -194,6 +211,42 @@ def record(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     return 1 if result.summary.faults else 0
+
+
+def probe(args: argparse.Namespace) -> int:
+    import threading
+
+    from edge.runtime.config import load_config
+    from edge.runtime.probe import Probe
+    from edge.runtime.probe_view import as_dict, calibrate, watch
+
+    config = load_config(args.config)
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        raise DataError(f"--duration {args.duration:g} must be a finite number of seconds > 0")
+    if not (math.isfinite(args.average) and 0.01 <= args.average <= 60):
+        raise DataError(f"--average {args.average:g} must be between 0.01 and 60 s")
+    stopped = threading.Event()
+    reader = Probe(config, args.rate)  # opened and vented
+    previous = {sig: signal.signal(sig, lambda *_: stopped.set()) for sig in (signal.SIGTERM, signal.SIGINT)}
+    try:
+        if args.calibrate:
+            reader.channel(args.calibrate)  # an unknown channel is refused before anything is shown
+            live = sys.stdout.isatty() and sys.stdin.isatty()
+            result = calibrate(
+                reader, args.calibrate, args.average, sys.stdin.fileno(), sys.stdout, live, stopped.is_set
+            )
+            if result is None:
+                print("pmactl edge probe: stopped before both points; nothing calibrated", file=sys.stderr)
+                return 1
+        else:
+            watch(reader, args.duration, sys.stdout, sys.stdout.isatty() and not args.json, stopped.is_set, args.json)
+    finally:
+        reader.close()
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    if args.json:
+        print(json.dumps(as_dict(reader)), flush=True)
+    return 0
 
 
 def _print_summary(result: dict[str, object]) -> None:
