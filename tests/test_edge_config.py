@@ -11,6 +11,7 @@ import pytest
 
 from edge.errors import ConfigError
 from edge.runtime.config import config_from_dict, fastest_period_s, load_config
+from tests.edge_helpers import HIL_RIG
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "docs" / "examples"
 
@@ -220,3 +221,37 @@ def test_a_missing_file_bad_toml_a_directory_and_binary_are_one_line_errors(tmp_
     (tmp_path / "bin.toml").write_bytes(b"\xff\xfe\x00\x81")
     with pytest.raises(ConfigError, match="not a text file"):
         load_config(tmp_path / "bin.toml")
+
+
+@pytest.mark.parametrize(
+    ("where", "change", "expected"),
+    [
+        (("channels", "estop"), {"input": -1}, "[channels.estop] input = -1 must be a GPIO line offset in 0..1023"),
+        (("channels", "valve_enable"), {"input": 4096}, "[channels.valve_enable] input = 4096"),
+        (("channels", "estop"), {"input": 17}, "[channels.estop] input = 17 is already [channels.valve_enable]'s"),
+        (("channels", "contraction"), {"input": 7}, "[channels.contraction] input = 7 must be the ADS1015's AIN"),
+        (("channels", "contraction"), {"input": 0}, "[channels.contraction] input = 0 is already [channels.pressure]"),
+        (("channels", "pressure"), {"zero": 9.0}, "[channels.pressure] zero = 9 V is outside the ADS1015's +-4.096"),
+        (("channels", "pressure"), {"scale": 1e9}, "[channels.pressure] scale = 1e+09 is outside"),
+        (("channels", "valve"), {"input": 1}, "[channels.valve] input = 1: an MCP4725 has one output"),
+        (("devices", "adc"), {"address": 0x50}, "[devices.adc] address = 0x50 is not an ADS1015 address"),
+        (("devices", "dac"), {"address": 0x70}, "[devices.dac] address = 0x70 is not an MCP4725 address"),
+        (("devices", "dac"), {"address": 0x48}, "[devices.dac] address = 0x48 on bus 'i2c' is already [devices.adc]'s"),
+        (("devices", "dac"), {"address": 0x7F}, "[devices.dac] address = 0x7f is not a 7-bit I2C device address"),
+    ],
+)
+def test_every_line_input_address_and_scale_is_range_checked_naming_the_key(where, change, expected):
+    raw = tomllib.loads(HIL_RIG.read_text())
+    raw[where[0]][where[1]].update(change)
+    with pytest.raises(ConfigError) as info:
+        config_from_dict(raw, "rig.toml")
+    assert expected in str(info.value) and "\n" not in str(info.value)
+
+
+def test_two_chips_at_one_address_are_refused():
+    raw = tomllib.loads((HIL_RIG.parent / "hil-joint.toml").read_text())
+    raw["devices"]["dac_b"]["address"] = 0x60
+    with pytest.raises(
+        ConfigError, match=r"\[devices.dac_b\] address = 0x60 on bus 'i2c' is already \[devices.dac_a\]"
+    ):
+        config_from_dict(raw, "joint.toml")

@@ -94,3 +94,29 @@ def option(spec: DeviceSpec, key: str, default: Any, kind: type, source: str) ->
     if not ok:
         raise ConfigError(f"{source}: [devices.{spec.name}] {key} = {value!r} must be {kind.__name__}")
     return float(value) if kind is float else value  # type: ignore[arg-type]
+
+
+def check_inputs(channels: tuple[ChannelSpec, ...], low: int, high: int, what: str, source: str) -> None:
+    """Every channel's ``input`` an integer in ``low..high`` and no two the same; one line
+    naming the channel key otherwise (``what`` says what an input is on this device)."""
+    seen: dict[int, str] = {}
+    for c in channels:
+        if c.input is None:
+            raise ConfigError(f"{source}: [channels.{c.name}] input missing; give {what} ({low}..{high})")
+        if not low <= c.input <= high:
+            raise ConfigError(f"{source}: [channels.{c.name}] input = {c.input} must be {what} in {low}..{high}")
+        if c.input in seen:
+            raise ConfigError(
+                f"{source}: [channels.{c.name}] input = {c.input} is already [channels.{seen[c.input]}]'s; "
+                "give each channel its own"
+            )
+        seen[c.input] = c.name
+
+
+def check_address(spec: DeviceSpec, allowed: range, chip: str, source: str) -> None:
+    """The device's I2C ``address`` one its chip can answer at (when given)."""
+    if spec.address is not None and spec.address not in allowed:
+        raise ConfigError(
+            f"{source}: [devices.{spec.name}] address = {spec.address:#04x} is not an {chip} address; "
+            f"use {allowed[0]:#04x}..{allowed[-1]:#04x} (its address pins)"
+        )

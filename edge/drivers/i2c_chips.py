@@ -15,12 +15,15 @@ from typing import Any, ClassVar
 
 from edge.devices.ads1x15 import DATA_RATES, FULL_SCALE_V, ADS1x15
 from edge.devices.mcp4725 import MCP4725
-from edge.drivers.base import option
+from edge.drivers.base import check_address, check_inputs, option
 from edge.errors import ConfigError
 from edge.hal.clock import Clock
 from edge.hal.i2c import I2CBus
 from edge.runtime.rigspec import ANALOG_IN, ANALOG_OUT, BusSpec, ChannelSpec, DeviceSpec
 from edge.runtime.wire import WireTime
+
+ADS1X15_ADDRESSES = range(0x48, 0x4C)  # ADDR pin to GND, VDD, SDA, SCL
+MCP4725_ADDRESSES = range(0x60, 0x68)  # A0 (and the factory-set A1, A2)
 
 
 def _bus_hz(bus: BusSpec, source: str) -> float:
@@ -52,9 +55,14 @@ class ADS1x15Device:
                 f"{source}: [devices.{spec.name}] full_scale_v {fsr} is not one of {sorted(FULL_SCALE_V)}"
             )
         option(spec, "pipeline", True, bool, source)
-        inputs = [c.input for c in channels]
-        if any(i is None or not 0 <= i <= 3 for i in inputs) or len(set(inputs)) != len(inputs):
-            raise ConfigError(f"{source}: [devices.{spec.name}] channel inputs {inputs} must be distinct and in 0..3")
+        check_address(spec, ADS1X15_ADDRESSES, cls.variant, source)
+        check_inputs(channels, 0, 3, f"the {cls.variant}'s AIN input", source)
+        for c in channels:  # volts = value / scale + zero must be a voltage the chip can read
+            if not -fsr <= c.zero <= fsr:
+                raise ConfigError(
+                    f"{source}: [channels.{c.name}] zero = {c.zero:g} V is outside the {cls.variant}'s "
+                    f"+-{fsr:g} V (full_scale_v); zero is the reading in volts at value 0"
+                )
         _bus_hz(bus, source)
 
     @classmethod
@@ -136,6 +144,12 @@ class MCP4725Device:
             raise ConfigError(f"{source}: [devices.{spec.name}] vdd_v = {vdd} outside the MCP4725's 2.7..5.5 V")
         if len(channels) != 1:
             raise ConfigError(f"{source}: [devices.{spec.name}] an MCP4725 drives one channel, not {len(channels)}")
+        check_address(spec, MCP4725_ADDRESSES, "MCP4725", source)
+        (channel,) = channels
+        if channel.input is not None:
+            raise ConfigError(
+                f"{source}: [channels.{channel.name}] input = {channel.input}: an MCP4725 has one output; drop input"
+            )
         _bus_hz(bus, source)
 
     @classmethod

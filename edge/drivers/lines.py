@@ -9,11 +9,13 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from edge.errors import ConfigError
+from edge.drivers.base import check_inputs
 from edge.hal.clock import Clock
 from edge.hal.gpio import GpioLines
 from edge.runtime.rigspec import LINE_IN, LINE_OUT, BusSpec, ChannelSpec, DeviceSpec
 from edge.runtime.wire import WireTime
+
+MAX_LINE_OFFSET = 1023  # gpiochips of SBCs have up to a few hundred lines
 
 
 class GpioChip:
@@ -42,9 +44,7 @@ class GpioDevice:
 
     @classmethod
     def check(cls, spec: DeviceSpec, channels: tuple[ChannelSpec, ...], bus: BusSpec, source: str) -> None:
-        offsets = [c.input for c in channels]
-        if bus.scheme == "gpiochip" and (any(o is None or o < 0 for o in offsets) or len(set(offsets)) != len(offsets)):
-            raise ConfigError(f"{source}: [devices.{spec.name}] line offsets {offsets} must be distinct and >= 0")
+        check_inputs(channels, 0, MAX_LINE_OFFSET, "a GPIO line offset", source)
 
     @classmethod
     def wire_time(cls, spec: DeviceSpec, channels: tuple[ChannelSpec, ...], bus: BusSpec) -> WireTime:

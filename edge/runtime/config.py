@@ -291,7 +291,20 @@ def _check_ordered(src: str, section: str, low_name: str, low: float, high: floa
 
 def _check_devices(config: RigConfig, drivers: dict[str, DriverClass]) -> None:
     rig, src = config.rig, config.source
+    taken: dict[tuple[str, int], str] = {}
     for device in rig.devices:
+        if device.address is not None:
+            if not 0x08 <= device.address <= 0x77:
+                raise ConfigError(
+                    f"{src}: [devices.{device.name}] address = {device.address:#04x} is not a 7-bit I2C device "
+                    "address (0x08..0x77)"
+                )
+            other = taken.setdefault((device.bus, device.address), device.name)
+            if other != device.name:
+                raise ConfigError(
+                    f"{src}: [devices.{device.name}] address = {device.address:#04x} on bus {device.bus!r} is already "
+                    f"[devices.{other}]'s; two chips cannot answer at one address"
+                )
         cls, bus = drivers[device.driver], rig.bus(device.bus)
         if bus.scheme not in cls.bus_schemes:
             raise ConfigError(

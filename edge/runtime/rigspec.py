@@ -36,6 +36,8 @@ JOINT_REQUIRED_CHANNELS = {"angle": "deg", "valve": "bar", "valve_b": "bar", "es
 FIXED_UNITS = {"pressure": "bar", "pressure_b": "bar", "angle": "deg", "valve_b": "bar"}
 OUTPUT_CHANNELS = ("valve", "valve_b", "valve_enable")
 BUS_SCHEMES = ("i2c", "serial", "gpiochip", "sim")
+SCALE_RANGE = (1e-6, 1e6)  # |units per volt| a real sensor or valve can have
+ZERO_LIMIT_V = 100.0  # the reading at value 0 [V]; no converter here reads beyond this
 NAME_CHARS = set("abcdefghijklmnopqrstuvwxyz0123456789_")
 
 
@@ -225,6 +227,14 @@ def parse_rig(raw: dict[str, object], source: str, driver_kinds: dict[str, dict[
             raise ConfigError(
                 f"{source}: [{where}] scale = {scale} must map volts to a range (non-zero; positive for outputs)"
             )
+        if not SCALE_RANGE[0] <= abs(scale) <= SCALE_RANGE[1]:
+            raise ConfigError(
+                f"{source}: [{where}] scale = {scale:g} is outside +-{SCALE_RANGE[0]:g}..{SCALE_RANGE[1]:g} "
+                f"{unit or 'units'} per volt; check the sensor's data sheet (value = (volts - zero) * scale)"
+            )
+        zero = _number(table, "zero", where, source, 0.0)
+        if not -ZERO_LIMIT_V <= zero <= ZERO_LIMIT_V:
+            raise ConfigError(f"{source}: [{where}] zero = {zero:g} must be a voltage within +-{ZERO_LIMIT_V:g} V")
         minimum = _number(table, "min", where, source, -1e300)
         maximum = _number(table, "max", where, source, 1e300)
         if not minimum < maximum:
@@ -240,7 +250,7 @@ def parse_rig(raw: dict[str, object], source: str, driver_kinds: dict[str, dict[
                 index,
                 unit,
                 scale,
-                _number(table, "zero", where, source, 0.0),
+                zero,
                 -math.inf if minimum == -1e300 else minimum,
                 math.inf if maximum == 1e300 else maximum,
                 active_low,
