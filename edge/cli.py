@@ -129,6 +129,12 @@ def run(args: argparse.Namespace) -> int:
         settle_s=args.settle,
     )
 
+    for warning in runtime.warnings:  # before arming
+        print(f"pmactl edge: warning: {warning}", file=sys.stderr, flush=True)
+    from edge.runtime.status import wants_status
+
+    prefix = "\n" if wants_status(args.json) else ""  # off the status line
+    runtime.on_warning.append(lambda text: print(f"{prefix}pmactl edge: warning: {text}", file=sys.stderr, flush=True))
     summary = _run_stoppable(runtime, lambda: runtime.run(args.duration), f"running {args.reference}", args.json)
     result = summary.as_dict()
     if args.json:

@@ -74,7 +74,9 @@ def test_telemetry_has_every_tick_the_frame_columns_and_an_end_event(bundle, tmp
     ff, fb = record.column("u_ff_bar"), record.column("u_fb_bar")
     assert abs(u[-1] - (ff[-1] + fb[-1])) < 1e-9  # unsaturated: the command is the sum of its parts
     assert not record.rows["wr_dac"].any() and not record.rows["rd_adc"].any()
-    assert [e["kind"] for e in record.events] == ["arm", "end"]
+    # seed 000's sine reaches 70 mm, the example bundle (0..4 bar) 58 mm: said before arming
+    assert [e["kind"] for e in record.events] == ["arm", "warning", "end"]
+    assert "beyond" not in str(record.events[1]["text"]) and "bundle reaches only" in str(record.events[1]["text"])
     end = record.events[-1]["summary"]
     assert end["ticks"] == 3000 and end["faults"] == [] and end["rms_error"] == pytest.approx(summary["rms_error"])
 

@@ -252,6 +252,10 @@ def _check_values(config: RigConfig) -> None:
     _in_range(src, "safety", "overrun_streak", safety.overrun_streak, 1, 1000)
     _in_range(src, "safety", "stuck_window_s", safety.stuck_window_s, 1e-3, 3600.0)
     _in_range(src, "safety", "stuck_command_span_bar", safety.stuck_command_span_bar, 1e-3, 100.0)
+    _in_range(
+        src, "safety", "mismatch_share", safety.mismatch_share, 0.0, 10.0, " (a share of the command; 0 disables)"
+    )
+    _in_range(src, "safety", "mismatch_window_s", safety.mismatch_window_s, 0.1, 3600.0)
     if control.pressure_max_bar > safety.pressure_max_bar:
         raise ConfigError(
             f"{src}: [control] pressure_max_bar {control.pressure_max_bar} exceeds [safety] pressure_max_bar "

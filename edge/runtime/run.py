@@ -24,7 +24,7 @@ import numpy as np
 
 from edge.control.joint import JointController
 from edge.control.pid import PIDGains
-from edge.control.reference import Reference
+from edge.control.reference import Reference, beyond_reach
 from edge.control.tick import Controller, Limits, Readings
 from edge.errors import BusError, DataError
 from edge.runtime.bundle import Bundle
@@ -40,6 +40,7 @@ from edge.runtime.telemetry import TelemetryWriter
 SPIN_S = 300e-6  # poll the clock for the last 300 us before a deadline (wall clock only)
 PHASES = ("read", "control", "write", "log", "cpu")  # wall ns per phase; "cpu": thread CPU ns of control + log
 RUNNING_CODE = STATE_CODES[State.RUNNING]
+REACH_CHECK_S = 60.0  # an endless reference is checked over its first minute
 PUBLISH_S = 0.2  # how often the loop copies its running error sums to ``EdgeRuntime.errors``
 
 
@@ -239,6 +240,14 @@ class EdgeRuntime:
         self.recorder = recorder
         self.on_tick: list[Callable[[float], None]] = []  # run before each tick's read (tests inject faults)
         self.errors = ErrorStats()  # the running tracking-error sums (a status line reads them)
+        self.on_warning: list[Callable[[str], None]] = []  # each warning once, as it happens (the CLI prints)
+        self.warnings: list[str] = []  # before arming: a reference beyond the bundle's reach
+        inverse_model = self.controller.inverse
+        if inverse_model is not None:
+            length = reference.duration_s or REACH_CHECK_S
+            reach = beyond_reach(reference, length, tuple(inverse_model.input_range), self.unit)  # type: ignore[arg-type]
+            if reach:
+                self.warnings.append(reach)
 
     def _header(self) -> dict[str, object]:
         spec = self.config.rig
@@ -313,6 +322,8 @@ class EdgeRuntime:
             self.supervisor.arm(Readings(y0, frame.pressure_bar))
             if telemetry:
                 telemetry.event(0.0, "arm", f"armed at {y0:.2f} {self.unit}; {'; '.join(realtime.notes)}")
+                for warning in self.warnings:
+                    telemetry.event(0.0, "warning", warning)
             n_max = int(math.ceil(duration / period)) + 1 if duration is not None else 0
             if self.profile:
                 self.phase_ns = np.zeros((max(n_max, 1), len(PHASES)), dtype=np.int64)
@@ -353,7 +364,16 @@ class EdgeRuntime:
             "telemetry": str(self.telemetry_path) if self.telemetry_path else None,
             "telemetry_dropped": telemetry.dropped if telemetry else 0,
             "bundle": bundle_record(self.bundle),
+            "warnings": list(self.warnings),
         }
+
+    def _report(self, warnings: list[str], t: float, telemetry: TelemetryWriter | None) -> None:
+        for warning in warnings:
+            self.warnings.append(warning)
+            if telemetry is not None:
+                telemetry.event(t, "warning", warning)
+            for callback in self.on_warning:
+                callback(warning)
 
     def _loop(
         self,
@@ -376,6 +396,7 @@ class EdgeRuntime:
         reference_field, output_field = f"reference_{self.unit}", self.config.rig.output_field
         tick = 0
         streak = 0
+        reported = 0
         publish_every = max(1, int(round(PUBLISH_S / period)))
         next_publish = publish_every
         count, sum_sq, sum_abs, max_abs = errors.count, errors.sum_sq, errors.sum_abs, errors.max_abs
@@ -430,9 +451,12 @@ class EdgeRuntime:
                     t4 = clock_ns()
                     phase[tick] = (t1 - t0, t2 - t1, t3 - t2, t4 - t3, (c2 - c1) + (cpu_ns() - c3) if timed_cpu else 0)
                 tick += 1
-                if tick >= next_publish:  # for a status line in another thread
+                if tick >= next_publish:  # for a status line in another thread, and new warnings
                     errors.count, errors.sum_sq, errors.sum_abs, errors.max_abs = count, sum_sq, sum_abs, max_abs
                     next_publish = tick + publish_every
+                    if len(supervisor.warnings) > reported:
+                        self._report(supervisor.warnings[reported:], t, telemetry)
+                        reported = len(supervisor.warnings)
                 if watchdog is not None:
                     watchdog.heartbeat = time.monotonic()
                 if frame.state == SAFE_CODE:
@@ -445,5 +469,7 @@ class EdgeRuntime:
                     break
         finally:
             errors.count, errors.sum_sq, errors.sum_abs, errors.max_abs = count, sum_sq, sum_abs, max_abs
+        if len(supervisor.warnings) > reported:
+            self._report(supervisor.warnings[reported:], scheduler.index * period, telemetry)
         if self.stop_requested.is_set() and telemetry is not None:
             telemetry.event(scheduler.index * period, "stop", "stop requested (signal); valve vented")

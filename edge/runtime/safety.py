@@ -24,6 +24,7 @@ from typing import Any
 
 from edge.control.joint import JointController
 from edge.control.tick import Command, Controller, Readings, ScratchFrame
+from edge.runtime.mismatch import MismatchMonitor
 
 
 class Fault(Enum):
@@ -40,6 +41,7 @@ class Fault(Enum):
     MODEL_OUTPUT = 9
     WATCHDOG = 10
     TELEMETRY = 11
+    MODEL_MISMATCH = 12
 
 
 class State(Enum):
@@ -70,6 +72,11 @@ class SafetyLimits:
     angle_min_deg: float = -60.0  # a joint's angle range (rigs with an ``angle`` channel)
     angle_max_deg: float = 60.0
     tracking_error_max_deg: float = 20.0
+    # the bundle does not match the rig (edge.runtime.mismatch): the feedback carrying more than
+    # this share of the command over mismatch_window_s warns, or trips with mismatch_fault
+    mismatch_share: float = 0.3  # 0 disables
+    mismatch_window_s: float = 5.0
+    mismatch_fault: bool = False
 
 
 @dataclass(slots=True)
@@ -160,6 +167,8 @@ class Supervisor:
     _stuck: tuple[StuckDetector, StuckDetector] = field(init=False)
     _status: Any = None
     _status_zero: bytes = b""
+    mismatch: MismatchMonitor | None = field(init=False, default=None)
+    warnings: list[str] = field(init=False, default_factory=list)  # the runtime reports each once
 
     def __post_init__(self) -> None:
         self._period_us = self.period_s * 1e6
@@ -176,6 +185,10 @@ class Supervisor:
             StuckDetector(lim.stuck_window_s, lim.stuck_command_span_bar),
             StuckDetector(lim.stuck_window_s, lim.stuck_command_span_bar),
         )
+        joint = self.output_field == "angle_deg"
+        if self.controller.inverse is not None and lim.mismatch_share > 0:  # only a model can mismatch
+            self.mismatch = MismatchMonitor(lim.mismatch_share, lim.mismatch_window_s, "deg" if joint else "bar")
+        self._feedback_field = "u_fb_deg" if joint else "u_fb_bar"
 
     def arm(self, readings: Readings) -> None:
         if self.state is not State.CONFIGURED:
@@ -185,6 +198,8 @@ class Supervisor:
         self._armed_at = math.nan
         for detector in self._stuck:
             detector.reset()
+        if self.mismatch is not None:
+            self.mismatch.reset()
         self.state = State.ARMED
 
     def reset(self) -> None:
@@ -300,8 +315,14 @@ class Supervisor:
         if u - u != 0.0:
             return self.trip(frame, Fault.MODEL_OUTPUT, "control output is not finite")
         error = controller.reference_mm_ - y
-        if (error > track_max or -error > track_max) and t - self._armed_at >= lim.tracking_grace_s:
-            return self.trip(frame, Fault.TRACKING, f"tracking error {abs(error):.1f} {unit} > {track_max} {unit}")
+        if t - self._armed_at >= lim.tracking_grace_s:
+            if error > track_max or -error > track_max:
+                return self.trip(frame, Fault.TRACKING, f"tracking error {abs(error):.1f} {unit} > {track_max} {unit}")
+            mismatch = self.mismatch
+            if mismatch is not None and mismatch.add(t, bias, getattr(frame, self._feedback_field)) is not None:
+                if lim.mismatch_fault:
+                    return self.trip(frame, Fault.MODEL_MISMATCH, mismatch.warning or "model mismatch")
+                self.warnings.append(mismatch.warning or "model mismatch")
         self.state = State.RUNNING
         frame.valve_enable, frame.state, frame.fault = 1.0, RUNNING_CODE, 0
         return None
