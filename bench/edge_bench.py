@@ -1,6 +1,8 @@
 """Benchmark of the edge loop: per-tick compute inside the running loop, real-time lateness.
 
 Usage: python bench/edge_bench.py [--seconds 60] [--skip-realtime] [--before DIR] [--repeats 3]
+       python bench/edge_bench.py --only-rig-commands 3 [--rig-seconds 20]
+       python bench/edge_bench.py --only-live 3 [--rig-seconds 20]
 
 1. Per-tick breakdown (median / p99 us) of a 20 s lockstep run on the HIL at 1 kHz with a
    Preisach lookup-table inverse and a 2-5-10-1 ONNX correction (seed 000's BP net shape):
@@ -14,6 +16,13 @@ Usage: python bench/edge_bench.py [--seconds 60] [--skip-realtime] [--before DIR
 2. Lateness of a real-time 1 kHz run (``--seconds``) over the serial DAQ protocol on a pty, the
    HIL in its own process (``pmactl hil serve``): median, p99, p99.9, max, overruns per 1e4
    ticks, with and without SCHED_FIFO.
+2b. ``edge run``, ``edge record`` and ``edge probe`` in real time at 1 kHz on the emulated
+   ADS1015 rig (in-process, ``sim://rig?clock=realtime``), interleaved: overruns, lateness, the
+   process's CPU time per wall second.
+2c. Whole-tick wall time (read to log) of 1 kHz runs with and without ``--live`` (a real
+   WebSocket client subscribed to every channel in its own process), on the lockstep clock (the
+   loop flat out: the publisher gets more ticks per wall second than in real time) and the
+   real-time clock.
 3. The same schedule in C (bench/c_sleep_loop.c, compiled with cc) for 1e4 ticks, with and
    without SCHED_FIFO: what this machine allows any program.
 """
@@ -192,6 +201,121 @@ def realtime_run(bundle: Path, seconds: float, fifo: bool) -> dict:
     return summary
 
 
+def rig_command(kind: str, bundle: Path, seconds: float, root: Path) -> tuple[dict, float, float]:
+    """One real-time 1 kHz ``edge run`` / ``record`` / ``probe`` on the emulated ADS1015 rig
+    (sim://rig in real time, the loop in this process): its lateness summary, wall s, CPU s."""
+    from edge.runtime import record as recording
+    from edge.runtime.probe import Probe
+
+    # overrun_streak 1000: every command runs its full length on a loaded machine, so the
+    # overrun counts compare (the default 5 in a row ends a run at the first stall)
+    config = rig_config(buses={"i2c": {"url": "sim://rig?clock=realtime"}}, safety={"overrun_streak": 1000})
+    wall, cpu = time.perf_counter(), time.process_time()
+    if kind == "edge run":
+        reference = parse_reference("sine:amplitude=30,frequency=0.2,offset=40")
+        lateness = EdgeRuntime(config, load_bundle(bundle), reference).run(seconds).lateness
+    elif kind == "edge record":
+        out = root / f"record-{time.monotonic_ns()}.csv"
+        runtime, recorder = recording.record(config, "triangles", out, duration_s=seconds)
+        lateness = recording.finish(runtime, recorder).summary.lateness
+    else:
+        probe = Probe(config)
+        try:
+            probe.run(seconds, lambda _: True, pace=False)
+        finally:
+            probe.close()
+        lateness = probe.scheduler.stats.summary()
+    return lateness, time.perf_counter() - wall, time.process_time() - cpu
+
+
+def rig_commands_table(bundle: Path, seconds: float, repeats: int) -> None:
+    print(f"\nReal-time 1 kHz on the emulated ADS1015 rig (sim://rig?clock=realtime), {seconds:g} s x {repeats}")
+    print(f"{'command':<14} {'ticks':>7} {'overruns':>9} {'per 1e4':>8} {'p99 us':>7} {'max us':>8} {'CPU/wall':>8}")
+    with tempfile.TemporaryDirectory() as tmp:
+        for _ in range(repeats):
+            for kind in ("edge run", "edge record", "edge probe"):
+                lat, wall, cpu = rig_command(kind, bundle, seconds, Path(tmp))
+                print(
+                    f"{kind:<14} {lat['ticks']:7.0f} {lat['overruns']:9.0f} {lat['overruns_per_10k']:8.2f} "
+                    f"{lat['lateness_p99_us']:7.0f} {lat['lateness_max_us']:8.0f} {cpu / wall:8.2f}"
+                )
+
+
+LIVE_CLIENT = """
+import asyncio, json, sys, time
+import websockets
+async def main(port):
+    for _ in range(400):
+        try:
+            ws = await websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"])
+            break
+        except OSError:
+            await asyncio.sleep(0.05)
+    n, first, last, sub = 0, None, None, 0
+    async with ws:
+        while True:
+            try:
+                m = await ws.recv()
+            except websockets.ConnectionClosed:
+                break
+            if isinstance(m, str):
+                op = json.loads(m)
+                if op["op"] == "advertise":
+                    for c in op["channels"]:
+                        sub += 1
+                        request = {"id": sub, "channelId": c["id"]}
+                        await ws.send(json.dumps({"op": "subscribe", "subscriptions": [request]}))
+            else:
+                n += 1
+                last = time.monotonic()
+                first = first or last
+    print(n, (last - first) if first else 0.0)
+asyncio.run(main(int(sys.argv[1])))
+"""
+
+
+def live_run(bundle: Path, seconds: float, live: bool, clock: str) -> tuple[np.ndarray, str]:
+    """Whole-tick wall time [us] (every phase, read to log) of one 1 kHz run on the emulated rig,
+    with a live view and a subscribed WebSocket client or without."""
+    import socket
+
+    from edge.runtime.live import LiveView
+
+    config = rig_config(buses={"i2c": {"url": f"sim://rig?clock={clock}"}}, safety={"overrun_streak": 1000})
+    edge = EdgeRuntime(
+        config, load_bundle(bundle), parse_reference("sine:amplitude=30,frequency=0.2,offset=40"), profile=True
+    )
+    client, note = None, ""
+    if live:
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        edge.live = LiveView(f"127.0.0.1:{port}", edge.layout.dtype, config.loop.rate_hz)
+        client = subprocess.Popen([sys.executable, "-c", LIVE_CLIENT, str(port)], stdout=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 20
+        while not edge.live.tick_channel.has_sinks() and time.monotonic() < deadline:
+            time.sleep(0.05)
+    summary = edge.run(seconds).as_dict()
+    if client is not None:
+        count, span = client.communicate(timeout=30)[0].split()
+        note = f"client got {int(count)} messages, {int(count) / max(float(span), 1e-9):.0f}/s"
+    phases = edge.phase_ns[: summary["ticks"], :4].sum(axis=1) / 1e3
+    return phases, note
+
+
+def live_table(bundle: Path, seconds: float, repeats: int) -> None:
+    print(f"\nWhole tick (read to log, wall us) with and without --live, 1 kHz, {seconds:g} s runs x {repeats}")
+    print(f"{'clock':<9} {'run':<22} {'median':>7} {'p99':>7} {'p99 ratio':>9}")
+    for clock in ("lockstep", "realtime"):
+        for _ in range(repeats):
+            base, _ = live_run(bundle, seconds, False, clock)
+            with_live, note = live_run(bundle, seconds, True, clock)
+            p99 = np.percentile(base, 99), np.percentile(with_live, 99)
+            print(f"{clock:<9} {'without':<22} {np.median(base):7.1f} {p99[0]:7.1f}")
+            row = f"{np.median(with_live):7.1f} {p99[1]:7.1f} {p99[1] / p99[0]:9.2f}"
+            print(f"{clock:<9} {'--live, client':<22} {row}  {note}")
+
+
 def c_loop(fifo: bool, ticks: int = 10_000) -> tuple[int, int] | None:
     cc = shutil.which("cc") or shutil.which("gcc")
     if cc is None:
@@ -212,11 +336,25 @@ def main() -> None:
     parser.add_argument("--before", type=Path, metavar="DIR", help="source tree of the pre-v2 runtime (commit 4df3193)")
     parser.add_argument("--repeats", type=int, default=3, help="runs per whole-tick row (default 3)")
     parser.add_argument("--compute-seconds", type=float, default=10.0, help="length of each whole-tick run")
+    parser.add_argument("--rig-seconds", type=float, default=20.0, help="length of each run/record/probe run")
+    parser.add_argument(
+        "--only-rig-commands", type=int, metavar="N", help="only the run/record/probe table, N repeats (0: skip it)"
+    )
+    parser.add_argument("--only-live", type=int, metavar="N", help="only the with/without --live table, N repeats")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         bundle = make_bundle(Path(tmp))
+        if args.only_rig_commands:
+            rig_commands_table(bundle, args.rig_seconds, args.only_rig_commands)
+            return
+        if args.only_live:
+            live_table(bundle, args.rig_seconds, args.only_live)
+            return
         breakdown(bundle)
         compute_table(bundle, args.compute_seconds, args.repeats, args.before)
+        if args.only_rig_commands is None or args.only_rig_commands > 0:
+            rig_commands_table(bundle, args.rig_seconds, args.repeats)
+        live_table(bundle, args.rig_seconds, args.repeats)
         if args.skip_realtime:
             return
         print(f"\nReal-time 1 kHz over the serial DAQ (pty, HIL in another process), {args.seconds:g} s each")

@@ -51,6 +51,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         "{time} in the name becomes the start time",
     )
     erun.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    erun.add_argument(
+        "--live",
+        metavar="[HOST:]PORT",
+        help="serve the run live to Foxglove (WebSocket; same topics as the MCAP export); HOST defaults to 127.0.0.1",
+    )
     erun.set_defaults(run=run)
     erec = edge_sub.add_parser(
         "record",
@@ -79,6 +84,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     erec.add_argument("--telemetry", metavar="FILE", help="also write per-tick telemetry (as edge run --telemetry)")
     erec.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    erec.add_argument(
+        "--live",
+        metavar="[HOST:]PORT",
+        help="serve the run live to Foxglove (WebSocket; same topics as the MCAP export); HOST defaults to 127.0.0.1",
+    )
     erec.set_defaults(run=record)
     eprobe = edge_sub.add_parser(
         "probe", help="read every input with the valve disabled (wiring check); --calibrate a channel"
@@ -129,6 +139,7 @@ def run(args: argparse.Namespace) -> int:
         settle_s=args.settle,
     )
 
+    _attach_live(runtime, args.live)
     for warning in runtime.warnings:  # before arming
         print(f"pmactl edge: warning: {warning}", file=sys.stderr, flush=True)
     from edge.runtime.status import wants_status
@@ -155,6 +166,9 @@ def _run_stoppable(runtime: EdgeRuntime, body: Callable[[], T], what: str, json_
         runtime.stop_requested.set()
 
     status = None
+    live = runtime.live
+    if live is not None:
+        print(f"live view: {live.url} (Foxglove: Open connection -> Foxglove WebSocket)", file=sys.stderr, flush=True)
     if wants_status(json_output):
         spec = runtime.config.rig
         status = StatusLine(lambda: describe_frame(runtime.frame, spec.output_field, spec.output_unit, runtime.errors))
@@ -166,8 +180,23 @@ def _run_stoppable(runtime: EdgeRuntime, body: Callable[[], T], what: str, json_
     finally:
         if status is not None:
             status.stop()
+        if live is not None:
+            live.close()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+
+
+def _attach_live(runtime: EdgeRuntime, address: str | None) -> None:
+    """``--live``: a Foxglove WebSocket server fed by the runtime; the rig is released if it fails."""
+    if address is None:
+        return
+    from edge.runtime.live import LiveView
+
+    try:
+        runtime.live = LiveView(address, runtime.layout.dtype, runtime.config.loop.rate_hz)
+    except BaseException:
+        runtime.rig.close()
+        raise
 
 
 def record(args: argparse.Namespace) -> int:
@@ -186,6 +215,11 @@ def record(args: argparse.Namespace) -> int:
         sample_hz=args.sample_hz,
         telemetry_path=args.telemetry,
     )
+    try:
+        _attach_live(runtime, args.live)
+    except BaseException:
+        recording.abandon(runtime, recorder)
+        raise
     result = _run_stoppable(
         runtime, lambda: recording.finish(runtime, recorder), f"recording {args.protocol} to {args.out}", args.json
     )

@@ -4,6 +4,7 @@ recording vents and keeps every row."""
 
 from __future__ import annotations
 
+import json
 import os
 import pty
 import select
@@ -13,7 +14,6 @@ import sys
 import time
 from pathlib import Path
 
-from host.data import load_measurement
 from tests.edge_helpers import HIL_RIG
 
 PMACTL = [sys.executable, "-m", "host.cli"]
@@ -54,8 +54,10 @@ def on_pty(args: list[str], interrupt_after_s: float | None = None, timeout_s: f
 
 
 def realtime_rig(tmp_path: Path) -> Path:
+    """The emulated rig on the wall clock at 200 Hz, overruns of a loaded test machine tolerated
+    (these tests are about the terminal, not the schedule)."""
     text = HIL_RIG.read_text().replace('url = "sim://rig?clock=lockstep"', 'url = "sim://rig?clock=realtime"')
-    text = text.replace("rate_hz = 1000", "rate_hz = 200")  # a shared test machine keeps 200 Hz
+    text = text.replace("rate_hz = 1000", "rate_hz = 200").replace("overrun_streak = 5", "overrun_streak = 1000")
     path = tmp_path / "rig.toml"
     path.write_text(text)
     return path
@@ -98,6 +100,9 @@ def test_ctrl_c_during_a_recording_vents_and_keeps_the_rows(tmp_path: Path) -> N
     args = ["edge", "record", "--config", str(realtime_rig(tmp_path)), "--protocol", "triangles"]
     shown, status = on_pty([*args, "--out", str(csv)], interrupt_after_s=4.0)
     assert status == 0, shown
-    data = load_measurement(csv)
-    assert 1.0 < data.t[-1] < 10.0  # stopped early, every row up to the stop kept
-    assert f"{len(data.t)} rows" in shown
+    rows = csv.read_text().splitlines()[1:]
+    last_t = float(rows[-1].split(",")[0])
+    assert 1.0 < last_t < 10.0  # stopped early, every row up to the stop kept
+    assert f"{len(rows)} rows" in shown
+    meta = json.loads(csv.with_name("run.meta.json").read_text())
+    assert meta["stopped"] == "stop" and meta["rows"] == len(rows) and meta["complete"]

@@ -13,6 +13,23 @@ from pathlib import Path
 from edge.errors import DataError
 from edge.runtime.telemetry_read import Telemetry
 
+TICK_TOPIC, TICK_SCHEMA_NAME = "/pmactl/tick", "pmactl.Tick"
+EVENT_TOPIC, EVENT_SCHEMA_NAME = "/pmactl/events", "pmactl.Event"
+EVENT_SCHEMA = {
+    "type": "object",
+    "properties": {"t": {"type": "number"}, "kind": {"type": "string"}, "text": {"type": "string"}},
+}
+
+
+def tick_schema_of(columns: list[str] | tuple[str, ...]) -> dict[str, object]:
+    """The JSON schema of one tick message: every column a number (null for NaN)."""
+    return {"type": "object", "properties": {c: {"type": ["number", "null"]} for c in columns}}
+
+
+def tick_message(columns: list[str] | tuple[str, ...], values: list[float]) -> dict[str, float | None]:
+    """One tick as the JSON object both the MCAP export and the live view send."""
+    return {c: _number(float(v)) for c, v in zip(columns, values)}
+
 
 def _start_ns(header: dict[str, object]) -> int:
     started = header.get("started_utc")
@@ -34,14 +51,7 @@ def export_mcap(record: Telemetry, path: Path) -> int:
 
     columns = record.columns
     start = _start_ns(record.header)
-    tick_schema = {
-        "type": "object",
-        "properties": {c: {"type": ["number", "null"]} for c in columns},
-    }
-    event_schema = {
-        "type": "object",
-        "properties": {"t": {"type": "number"}, "kind": {"type": "string"}, "text": {"type": "string"}},
-    }
+    tick_schema, event_schema = tick_schema_of(columns), EVENT_SCHEMA
     try:
         stream = path.open("wb")
     except OSError as exc:
@@ -51,20 +61,20 @@ def export_mcap(record: Telemetry, path: Path) -> int:
         writer = Writer(stream)
         writer.start(profile="", library="pmactl")
         tick_id = writer.register_channel(
-            topic="/pmactl/tick",
+            topic=TICK_TOPIC,
             message_encoding="json",
-            schema_id=writer.register_schema("pmactl.Tick", "jsonschema", json.dumps(tick_schema).encode()),
+            schema_id=writer.register_schema(TICK_SCHEMA_NAME, "jsonschema", json.dumps(tick_schema).encode()),
         )
         event_id = writer.register_channel(
-            topic="/pmactl/events",
+            topic=EVENT_TOPIC,
             message_encoding="json",
-            schema_id=writer.register_schema("pmactl.Event", "jsonschema", json.dumps(event_schema).encode()),
+            schema_id=writer.register_schema(EVENT_SCHEMA_NAME, "jsonschema", json.dumps(event_schema).encode()),
         )
         values = {c: record.rows[c].tolist() for c in columns}
         times = values.get("t", [i * 0.001 for i in range(len(record.rows))])
         for i, t in enumerate(times):
             stamp = start + int(round(float(t) * 1e9))
-            message = {c: _number(float(values[c][i])) for c in columns}
+            message = tick_message(columns, [values[c][i] for c in columns])
             writer.add_message(
                 tick_id, log_time=stamp, data=json.dumps(message).encode(), publish_time=stamp, sequence=i
             )

@@ -17,6 +17,7 @@ the config's ``value = (volts - zero) * scale``.
 from __future__ import annotations
 
 import errno
+import gc
 import math
 import time
 from collections.abc import Callable
@@ -100,12 +101,28 @@ class Probe:
         pace: bool = True,
     ) -> None:
         """Read until ``duration_s`` [s] (None: until ``stop()`` or ``on_refresh`` returns False)."""
-        rig, frame, reads = self.rig, self.frame, self._reads
-        scheduler = self.scheduler
+        rig, frame = self.rig, self.frame
         wall0 = time.monotonic()
-        next_refresh = 0.0
         rig.read(frame)
         rig.prepare(frame)
+        gc.collect()
+        gc.freeze()  # as the loop does: no collector pauses between ticks
+        try:
+            self._loop(duration_s, on_refresh, refresh_s, stop, pace, wall0)
+        finally:
+            gc.unfreeze()
+
+    def _loop(
+        self,
+        duration_s: float | None,
+        on_refresh: Callable[[Probe], bool],
+        refresh_s: float,
+        stop: Callable[[], bool],
+        pace: bool,
+        wall0: float,
+    ) -> None:
+        rig, frame, reads, scheduler = self.rig, self.frame, self._reads, self.scheduler
+        next_refresh = 0.0
         scheduler.start()
         while not stop():
             t, _ = scheduler.wait()

@@ -167,6 +167,12 @@ def _abandon(recorder: CsvRecorder) -> None:
             path.unlink(missing_ok=True)
 
 
+def abandon(runtime: EdgeRuntime, recorder: CsvRecorder) -> None:
+    """Give up a prepared recording before it ran: the rig released, the empty CSV removed."""
+    runtime.rig.close()
+    _abandon(recorder)
+
+
 def finish(runtime: EdgeRuntime, recorder: CsvRecorder) -> RecordResult:
     """Run the prepared recording to its end (or a fault or a stop) and close the CSV."""
     try:

@@ -30,7 +30,7 @@ import numpy as np
 from edge.errors import DataError
 from edge.runtime.rigspec import ANALOG_IN, RigSpec
 from edge.runtime.safety import RUNNING_CODE
-from edge.runtime.telemetry import RingWriter
+from edge.runtime.telemetry import SampledRing
 
 
 @dataclass(frozen=True)
@@ -73,7 +73,7 @@ def meta_path(csv_path: str | Path) -> Path:
     return path.with_name(path.stem + ".meta.json")
 
 
-class CsvRecorder(RingWriter):
+class CsvRecorder(SampledRing):
     """Ring + writer thread into a new CSV (see the module docstring).
 
     Args:
@@ -123,29 +123,13 @@ class CsvRecorder(RingWriter):
         except OSError as exc:
             raise DataError(f"--out {self.path}: cannot write it ({exc.strerror}); choose a writable path") from exc
         self._fields = [c.field for c in self.columns]
-        self._every, self._next_t = every, 0.0
-        self._frame: Any = None
-        self._sample_s = self._half_tick = 0.0
+        self._every = every
         try:
             self._write_meta(complete=False)
         except DataError:
             self._file.close()
             raise
         self._start_ring(dtype, ring_ticks, flush_interval_s)
-
-    def bind_frame(self, frame: Any, period_s: float) -> None:
-        """The frame (a ctypes row) :meth:`record_bound` samples, and the loop's period [s]."""
-        self.bind(memoryview(frame).cast("B"))
-        self._frame, self._sample_s = frame, self._every * period_s
-        self._half_tick = 0.5 * period_s
-
-    def record_bound(self) -> None:
-        """Copy the bound frame into the ring on the first tick at or after each sample time
-        (a tick skipped by an overrun moves that row to the next tick, with its true ``t``)."""
-        t = self._frame.t
-        if t + self._half_tick >= self._next_t:
-            RingWriter.record_bound(self)
-            self._next_t += self._sample_s * (1 + int((t + self._half_tick - self._next_t) // self._sample_s))
 
     def _write_rows(self, chunk: np.ndarray) -> None:
         chunk = chunk[chunk["state"] == RUNNING_CODE]

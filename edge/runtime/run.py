@@ -30,6 +30,7 @@ from edge.errors import BusError, DataError
 from edge.runtime.bundle import Bundle
 from edge.runtime.config import RigConfig
 from edge.runtime.frame import frame_layout
+from edge.runtime.live import LiveView
 from edge.runtime.recorder import CsvRecorder
 from edge.runtime.rig import Rig, open_rig
 from edge.runtime.rigspec import ANALOG_IN
@@ -171,6 +172,7 @@ class EdgeRuntime:
             record`` passes an open-loop one (:mod:`edge.control.openloop`).
         recorder: a further per-tick sink (the recording CSV, :mod:`edge.runtime.recorder`);
             like telemetry, a write failure is a fault.
+        live: the live view (:mod:`edge.runtime.live`), fed ticks and events; never a fault.
     """
 
     def __init__(
@@ -187,6 +189,7 @@ class EdgeRuntime:
         rig: Rig | None = None,
         controller: Controller | JointController | None = None,
         recorder: CsvRecorder | None = None,
+        live: LiveView | None = None,
     ) -> None:
         self.config, self.bundle, self.reference = config, bundle, reference
         spec = config.rig
@@ -238,6 +241,7 @@ class EdgeRuntime:
         self._device_error_ticks = 0  # ticks on which some device reported an error
         self.telemetry: TelemetryWriter | None = None  # the open writer while running
         self.recorder = recorder
+        self.live = live
         self.on_tick: list[Callable[[float], None]] = []  # run before each tick's read (tests inject faults)
         self.errors = ErrorStats()  # the running tracking-error sums (a status line reads them)
         self.on_warning: list[Callable[[str], None]] = []  # each warning once, as it happens (the CLI prints)
@@ -300,6 +304,8 @@ class EdgeRuntime:
             telemetry.bind(self.layout.bytes_view(self.frame))
         if self.recorder is not None:
             self.recorder.bind_frame(self.frame, config.period_s)
+        if self.live is not None:
+            self.live.bind_frame(self.frame, config.period_s)
         realtime = RealtimeSettings(notes=["lockstep (simulated clock)"] if rig.lockstep else ["real-time disabled"])
         watchdog = None
         faults: list[str] = []
@@ -320,10 +326,9 @@ class EdgeRuntime:
                 raise BusError(5, f"cannot arm, the first read failed ({detail})")
             y0 = getattr(frame, config.rig.output_field)
             self.supervisor.arm(Readings(y0, frame.pressure_bar))
-            if telemetry:
-                telemetry.event(0.0, "arm", f"armed at {y0:.2f} {self.unit}; {'; '.join(realtime.notes)}")
-                for warning in self.warnings:
-                    telemetry.event(0.0, "warning", warning)
+            self._event(0.0, "arm", f"armed at {y0:.2f} {self.unit}; {'; '.join(realtime.notes)}")
+            for warning in self.warnings:
+                self._event(0.0, "warning", warning)
             n_max = int(math.ceil(duration / period)) + 1 if duration is not None else 0
             if self.profile:
                 self.phase_ns = np.zeros((max(n_max, 1), len(PHASES)), dtype=np.int64)
@@ -343,6 +348,9 @@ class EdgeRuntime:
                 watchdog.stop()
             realtime.restore()
             extra = self._extra(telemetry)
+            if self.live is not None:
+                self.live.event(scheduler.index * period, "end", "end of run")
+                self.live.close()
             if telemetry:
                 if telemetry.failure is not None and telemetry.failure not in faults:
                     faults.append(telemetry.failure)
@@ -367,11 +375,17 @@ class EdgeRuntime:
             "warnings": list(self.warnings),
         }
 
+    def _event(self, t: float, kind: str, text: str, **extra: object) -> None:
+        """An event to the telemetry log and the live view (whichever are open)."""
+        if self.telemetry is not None:
+            self.telemetry.event(t, kind, text, **extra)
+        if self.live is not None:
+            self.live.event(t, kind, text)
+
     def _report(self, warnings: list[str], t: float, telemetry: TelemetryWriter | None) -> None:
         for warning in warnings:
             self.warnings.append(warning)
-            if telemetry is not None:
-                telemetry.event(t, "warning", warning)
+            self._event(t, "warning", warning)
             for callback in self.on_warning:
                 callback(warning)
 
@@ -387,6 +401,7 @@ class EdgeRuntime:
         rig, supervisor, period, frame = self.rig, self.supervisor, self.config.period_s, self.frame
         read, step, write, prepare = rig.read, supervisor.step, rig.write, rig.prepare
         record = telemetry.record_bound if telemetry is not None else None
+        record_live = self.live.record_bound if self.live is not None else None
         recorder = self.recorder
         record_csv = recorder.record_bound if recorder is not None else None
         phase, profile, settle = self.phase_ns, self.profile, self.settle_s
@@ -441,12 +456,13 @@ class EdgeRuntime:
                     record()
                 if record_csv is not None:
                     record_csv()
+                if record_live is not None:
+                    record_live()
                 if supervisor._bus_errors != streak:
                     streak = supervisor._bus_errors
                     if streak:
                         self._device_error_ticks += 1
-                        if telemetry is not None:
-                            telemetry.event(t, "device_error", supervisor._device_fault(frame) or "device error")
+                        self._event(t, "device_error", supervisor._device_fault(frame) or "device error")
                 if profile and phase is not None and tick < len(phase):
                     t4 = clock_ns()
                     phase[tick] = (t1 - t0, t2 - t1, t3 - t2, t4 - t3, (c2 - c1) + (cpu_ns() - c3) if timed_cpu else 0)
@@ -462,14 +478,11 @@ class EdgeRuntime:
                 if frame.state == SAFE_CODE:
                     reason = supervisor.fault or "safe state"
                     faults.append(reason)
-                    if telemetry is not None:
-                        telemetry.event(
-                            t, "fault", reason, code=supervisor.fault_kind.value if supervisor.fault_kind else 0
-                        )
+                    self._event(t, "fault", reason, code=supervisor.fault_kind.value if supervisor.fault_kind else 0)
                     break
         finally:
             errors.count, errors.sum_sq, errors.sum_abs, errors.max_abs = count, sum_sq, sum_abs, max_abs
         if len(supervisor.warnings) > reported:
             self._report(supervisor.warnings[reported:], scheduler.index * period, telemetry)
-        if self.stop_requested.is_set() and telemetry is not None:
-            telemetry.event(scheduler.index * period, "stop", "stop requested (signal); valve vented")
+        if self.stop_requested.is_set():
+            self._event(scheduler.index * period, "stop", "stop requested (signal); valve vented")

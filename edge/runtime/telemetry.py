@@ -157,6 +157,30 @@ class RingWriter:
             self._fail(exc)
 
 
+class SampledRing(RingWriter):
+    """A ring that keeps the first tick at or after every ``_every`` periods (by the frame's
+    ``t``, so a tick skipped by an overrun moves that row to the next tick, with its true time).
+    A subclass sets ``_every`` (ticks per row) before :meth:`bind_frame`."""
+
+    _every = 1
+    _next_t = 0.0
+    _frame: Any = None
+    _sample_s = _half_tick = 0.0
+
+    def bind_frame(self, frame: Any, period_s: float) -> None:
+        """The frame (a ctypes row) :meth:`record_bound` samples, and the loop's period [s]."""
+        self.bind(memoryview(frame).cast("B"))
+        self._frame, self._sample_s = frame, self._every * period_s
+        self._half_tick = 0.5 * period_s
+
+    def record_bound(self) -> None:
+        """Copy the bound frame into the ring when a sample is due. Never blocks."""
+        t = self._frame.t
+        if t + self._half_tick >= self._next_t:
+            RingWriter.record_bound(self)
+            self._next_t += self._sample_s * (1 + int((t + self._half_tick - self._next_t) // self._sample_s))
+
+
 class TelemetryWriter(RingWriter):
     """Ring buffer + writer thread (see module docstring).
 
