@@ -100,3 +100,18 @@ def test_a_websocket_client_sees_the_live_run(tmp_path: Path, command: str) -> N
     assert {"t", "u_bar", "contraction_mm", "pressure_bar", "state", "fault"} <= set(first)
     events = [json.loads(payload)["kind"] for _, payload in result["seen"][EVENT_TOPIC]]
     assert events[-1:] == ["end"], events
+
+
+def test_the_shipped_layout_is_the_generated_one_and_names_real_columns() -> None:
+    import re
+
+    from edge.runtime.frame import frame_layout
+    from edge.runtime.live_layout import layout_json
+    from tests.edge_helpers import rig_config
+
+    shipped = (HIL_RIG.parent / "foxglove-layout.json").read_text().strip()
+    assert shipped == layout_json()
+    columns = set(frame_layout(rig_config().rig).names)
+    fields = set(re.findall(re.escape(TICK_TOPIC) + r"\.(\w+)", shipped))
+    assert fields and fields <= columns, fields - columns
+    assert EVENT_TOPIC in shipped
