@@ -201,15 +201,17 @@ def realtime_run(bundle: Path, seconds: float, fifo: bool) -> dict:
     return summary
 
 
-def rig_command(kind: str, bundle: Path, seconds: float, root: Path) -> tuple[dict, float, float]:
-    """One real-time 1 kHz ``edge run`` / ``record`` / ``probe`` on the emulated ADS1015 rig
-    (sim://rig in real time, the loop in this process): its lateness summary, wall s, CPU s."""
+def rig_command(
+    kind: str, bundle: Path, seconds: float, root: Path, clock: str = "realtime"
+) -> tuple[dict, float, float]:
+    """One 1 kHz ``edge run`` / ``record`` / ``probe`` on the emulated ADS1015 rig (sim://rig on
+    ``clock``, the loop in this process): its lateness summary, wall s, CPU s."""
     from edge.runtime import record as recording
     from edge.runtime.probe import Probe
 
     # overrun_streak 1000: every command runs its full length on a loaded machine, so the
     # overrun counts compare (the default 5 in a row ends a run at the first stall)
-    config = rig_config(buses={"i2c": {"url": "sim://rig?clock=realtime"}}, safety={"overrun_streak": 1000})
+    config = rig_config(buses={"i2c": {"url": f"sim://rig?clock={clock}"}}, safety={"overrun_streak": 1000})
     wall, cpu = time.perf_counter(), time.process_time()
     if kind == "edge run":
         reference = parse_reference("sine:amplitude=30,frequency=0.2,offset=40")
@@ -226,6 +228,20 @@ def rig_command(kind: str, bundle: Path, seconds: float, root: Path) -> tuple[di
             probe.close()
         lateness = probe.scheduler.stats.summary()
     return lateness, time.perf_counter() - wall, time.process_time() - cpu
+
+
+def rig_commands_cpu(bundle: Path, seconds: float, repeats: int) -> None:
+    """CPU per tick of the three commands in lockstep (the emulated chips and plant included):
+    what a loaded machine's lateness cannot blur."""
+    print(f"\nCPU per tick, lockstep emulated ADS1015 rig at 1 kHz, {seconds:g} s x {repeats} (us; ratio to edge run)")
+    with tempfile.TemporaryDirectory() as tmp:
+        for _ in range(repeats):
+            row = {}
+            for kind in ("edge run", "edge record", "edge probe"):
+                lat, _, cpu = rig_command(kind, bundle, seconds, Path(tmp), "lockstep")
+                row[kind] = cpu / max(lat["ticks"], 1) * 1e6
+            base = row["edge run"]
+            print("  ".join(f"{k} {v:6.1f} ({v / base:4.2f})" for k, v in row.items()))
 
 
 def rig_commands_table(bundle: Path, seconds: float, repeats: int) -> None:
@@ -345,6 +361,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         bundle = make_bundle(Path(tmp))
         if args.only_rig_commands:
+            rig_commands_cpu(bundle, args.rig_seconds, args.only_rig_commands)
             rig_commands_table(bundle, args.rig_seconds, args.only_rig_commands)
             return
         if args.only_live:
@@ -353,6 +370,7 @@ def main() -> None:
         breakdown(bundle)
         compute_table(bundle, args.compute_seconds, args.repeats, args.before)
         if args.only_rig_commands is None or args.only_rig_commands > 0:
+            rig_commands_cpu(bundle, args.rig_seconds, args.repeats)
             rig_commands_table(bundle, args.rig_seconds, args.repeats)
         live_table(bundle, args.rig_seconds, args.repeats)
         if args.skip_realtime:
