@@ -23,7 +23,6 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -174,6 +173,3 @@ class CsvRecorder(SampledRing):
                 self._fail(exc)
             else:
                 raise DataError(f"{target}: cannot write the recording's sidecar ({exc.strerror})") from exc
-
-    def describe(self) -> dict[str, Any]:
-        return {"csv": str(self.path), "rows": self.rows, "last_t": self.last_t}

@@ -17,7 +17,6 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -36,92 +35,15 @@ from edge.runtime.rig import Rig, open_rig
 from edge.runtime.rigspec import ANALOG_IN
 from edge.runtime.safety import SAFE_CODE, STATE_CODES, Fault, State, Supervisor
 from edge.runtime.scheduler import RealtimeSettings, TickScheduler, apply_realtime
+from edge.runtime.summary import ErrorStats, RunSummary
 from edge.runtime.telemetry import TelemetryWriter
+from edge.runtime.watchdog import Watchdog
 
 SPIN_S = 300e-6  # poll the clock for the last 300 us before a deadline (wall clock only)
 PHASES = ("read", "control", "write", "log", "cpu")  # wall ns per phase; "cpu": thread CPU ns of control + log
 RUNNING_CODE = STATE_CODES[State.RUNNING]
 REACH_CHECK_S = 60.0  # an endless reference is checked over its first minute
 PUBLISH_S = 0.2  # how often the loop copies its running error sums to ``EdgeRuntime.errors``
-
-
-@dataclass
-class ErrorStats:
-    """Running tracking-error sums [mm] over the scored ticks."""
-
-    count: int = 0
-    sum_sq: float = 0.0
-    sum_abs: float = 0.0
-    max_abs: float = 0.0
-
-    def add(self, error: float) -> None:
-        self.count += 1
-        self.sum_sq += error * error
-        self.sum_abs += abs(error)
-        self.max_abs = max(self.max_abs, abs(error))
-
-    def summary(self) -> dict[str, float | None]:
-        if not self.count:
-            return {"rms_error": None, "mean_abs_error": None, "max_error": None}
-        return {
-            "rms_error": math.sqrt(self.sum_sq / self.count),
-            "mean_abs_error": self.sum_abs / self.count,
-            "max_error": self.max_abs,
-        }
-
-
-@dataclass
-class RunSummary:
-    """What ``pmactl edge run --json`` prints (errors in ``unit``: mm, deg on a joint)."""
-
-    errors: ErrorStats
-    lateness: dict[str, float]
-    faults: list[str]
-    notes: list[str] = field(default_factory=list)
-    extra: dict[str, object] = field(default_factory=dict)
-
-    unit: str = "mm"
-
-    def as_dict(self) -> dict[str, object]:
-        return {
-            **self.errors.summary(),
-            "ticks": self.lateness["ticks"],
-            "overruns": self.lateness["overruns"],
-            "lateness_p99_us": self.lateness["lateness_p99_us"],
-            "faults": self.faults,
-            "unit": self.unit,
-            "scored_ticks": self.errors.count,
-            "lateness": self.lateness,
-            "realtime": self.notes,
-            **self.extra,
-        }
-
-
-class Watchdog:
-    """Vents the valve from its own thread if the loop stops ticking for ``timeout_s``.
-
-    The loop may be stalled inside a bus transfer; :meth:`Rig.vent` drops the GPIO enable line
-    first, which does not share that bus.
-    """
-
-    def __init__(self, rig: Rig, timeout_s: float) -> None:
-        self._rig, self.timeout_s = rig, timeout_s
-        self.heartbeat = time.monotonic()
-        self.fired_after_s: float | None = None
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="pmactl-watchdog", daemon=True)
-        self._thread.start()
-
-    def _run(self) -> None:
-        while not self._stop.wait(self.timeout_s / 4):
-            stalled = time.monotonic() - self.heartbeat
-            if stalled > self.timeout_s and self.fired_after_s is None:
-                self.fired_after_s = stalled
-                self._rig.vent()
-
-    def stop(self) -> None:
-        self._stop.set()
-        self._thread.join()
 
 
 def bundle_record(bundle: Bundle | None) -> dict[str, object] | None:
