@@ -290,9 +290,9 @@ def probe(args: argparse.Namespace) -> int:
 
 
 def _print_summary(result: dict[str, object]) -> None:
-    def mm(key: str) -> str:
+    def mm(key: str) -> str:  # mm on a muscle, deg on a joint
         value = result[key]
-        return f"{value:.3f} mm" if isinstance(value, float) else "n/a"
+        return f"{value:.3f} {result.get('unit', 'mm')}" if isinstance(value, float) else "n/a"
 
     lateness = result["lateness"]
     assert isinstance(lateness, dict)
