@@ -244,6 +244,12 @@ def record(args: argparse.Namespace) -> int:
         )
         if result.rows and not result.summary.faults:
             print(f"next: pmactl fit --model preisach --train {result.csv} --units {unit},{y_unit} --save BUNDLE_DIR")
+    if runtime.stop_requested.is_set() and not result.summary.faults:
+        print(
+            f"pmactl edge: stopped (valve vented); {result.rows} rows up to t={result.last_t:.3f} s "
+            f"kept in {result.csv}",
+            file=sys.stderr,
+        )
     for fault in result.summary.faults:
         print(
             f"pmactl edge: FAULT: {fault} (valve vented); {result.rows} rows up to "

@@ -103,6 +103,6 @@ def test_ctrl_c_during_a_recording_vents_and_keeps_the_rows(tmp_path: Path) -> N
     rows = csv.read_text().splitlines()[1:]
     last_t = float(rows[-1].split(",")[0])
     assert 1.0 < last_t < 10.0  # stopped early, every row up to the stop kept
-    assert f"{len(rows)} rows" in shown
+    assert f"{len(rows)} rows" in shown and "stopped (valve vented)" in shown
     meta = json.loads(csv.with_name("run.meta.json").read_text())
     assert meta["stopped"] == "stop" and meta["rows"] == len(rows) and meta["complete"]
