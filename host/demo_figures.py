@@ -1,4 +1,5 @@
-"""The figures ``pmactl demo`` writes: measured vs model loops, and the closed-loop tracking.
+"""The figures ``pmactl demo`` writes (measured vs model loops, the closed-loop tracking) and
+``pmactl fit --plot``'s loops of the user's own tests.
 
 Axes carry units; the tracking figure shades the settle window (not scored), draws the output
 range the bundle can reach, and states the RMS errors in mm and the cut in percent.
@@ -6,10 +7,16 @@ range the bundle can reach, and states the RMS errors in mm and the cut in perce
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from host.data import Measurement
+    from host.workflow import TestResult
 
 
 def _pyplot():  # noqa: ANN202 - matplotlib's module
@@ -85,6 +92,41 @@ def plot_tracking(
     if len(names) == 2 and rms_mm[names[0]] > 0:
         cut = 100.0 * (1.0 - rms_mm[names[1]] / rms_mm[names[0]])
         fig.suptitle(f"Closed loop on the emulated rig: {names[1]} cuts the RMS error by {cut:.0f} %")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def plot_test_loops(
+    path: Path,
+    model: str,
+    tests: Sequence[Measurement],
+    results: Sequence[TestResult],
+    u_unit: str,
+    y_unit: str,
+) -> Path:
+    """``pmactl fit --plot``: measured and model output against the input, one panel per test.
+
+    Only the scored part of each test is drawn (after its calibration window), as in the table.
+    """
+    plt = _pyplot()
+    columns = min(2, len(tests))
+    rows = -(-len(tests) // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(5.5 * columns, 4.5 * rows), squeeze=False)
+    for ax, test, result in zip(axes.ravel(), tests, results):
+        start = result.prediction.window_end
+        ax.plot(test.u[start:], test.y[start:], color="0.55", lw=1.0, label="measured")
+        ax.plot(test.u[start:], result.prediction.y[start:], color="C3", lw=0.8, label=model)
+        score = result.prediction.score
+        ax.set_title(f"{result.name}: RMSE {score.rmse:.3g} {y_unit} ({score.rmse_pct_pp:.2f} % p-p)", fontsize=10)
+        ax.set_xlabel(f"input u [{u_unit}]")
+        ax.set_ylabel(f"output y [{y_unit}]")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="best", fontsize=8, framealpha=0.9)
+    for ax in axes.ravel()[len(tests) :]:
+        ax.set_visible(False)
+    fig.suptitle(f"pmactl fit --model {model}: held-out loops, scored part")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

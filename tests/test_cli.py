@@ -31,7 +31,7 @@ def test_help_lists_the_subcommands():
 def test_fit_json_has_the_documented_keys(capsys):
     assert main(["fit", "--model", "pi", "--train", TRAIN, "--test", TEST, "--test", TEST, "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
-    assert set(report) == {"model", "fit_seconds", "tests"}
+    assert set(report) == {"model", "fit_seconds", "units", "warnings", "tests"}
     assert report["model"] == "pi" and report["fit_seconds"] > 0
     assert len(report["tests"]) == 2
     assert set(report["tests"][0]) == {"file", "rmse", "rmse_pct_pp", "max_error"}

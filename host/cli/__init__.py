@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 import warnings
 from collections.abc import Callable, Sequence
 
 from edge import cli as edge_cli
 from host.cli.errors import OneLineParser, print_error
-from host.cli.options import add_fit_options, add_hil_options, positive_rate, version
+from host.cli.options import add_data_options, add_fit_options, add_hil_options, positive_rate, version
 
 
 def _lazy(module: str, function: str = "run") -> Callable[[argparse.Namespace], int]:
@@ -77,7 +78,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="share of each test record (after it starts moving) used to estimate its "
         "initial state and offset; never scored (default 0.1)",
     )
-    fit.add_argument("--units", default="u,y", metavar="U,Y", help="units of input and output for the bundle manifest")
+    add_data_options(fit)
+    fit.add_argument(
+        "--plot", metavar="OUT.png", help="write measured vs model loops of each --test here (.png/.pdf/.svg)"
+    )
     fit.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     fit.add_argument(
         "--save", metavar="DIR", help="write the lookup-table bundle (model + inverse) here; its parent must exist"
@@ -162,11 +166,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"pmactl {args.command}: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        return _reader_went_away()
     except Exception as exc:  # noqa: BLE001 - every error is one line; --debug shows the traceback
         if debug:
             raise
         print_error(args.command, exc)
         return 2
+
+
+def _reader_went_away() -> int:
+    """``pmactl ... | head -1``: the reader closed the pipe; stop quietly, as a killed ``cat`` would.
+
+    stdout is pointed at /dev/null so the interpreter's final flush does not report the pipe again.
+    """
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
+    return 141  # 128 + SIGPIPE, what the shell reports for a command the pipe ended
 
 
 def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001

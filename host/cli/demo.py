@@ -19,7 +19,6 @@ three controllers). Each result is printed as it finishes.
 from __future__ import annotations
 
 import argparse
-import json
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -33,7 +32,7 @@ from edge.runtime.run import EdgeRuntime
 from edge.runtime.telemetry import read_telemetry
 from hil.configs import HIL_JOINT_CONFIG, HIL_RIG_CONFIG
 from hil.joint_record import record_joint, write_joint_recording
-from host.cli.outputs import OutputPathError, check_output
+from host.cli.outputs import OutputPathError, check_output, strict_json
 from host.data import Measurement, load_measurement
 from host.demo_figures import plot_loops, plot_tracking
 from host.examples import example_path
@@ -250,5 +249,5 @@ def run(args: argparse.Namespace) -> int:
             "figures": [str(loops), str(tracking)],
             "warnings": [reach] if reach else [],
         }
-        print(json.dumps(report, indent=2))
+        print(strict_json(report, indent=2))
     return 0

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import json
+
+from host.cli.outputs import strict_json
 
 TARGET_HELP = "a directory, or ssh://[user@]host[:port]/path (uses ~/.ssh/config, ssh-agent, known_hosts)"
 
@@ -59,7 +60,7 @@ def _report(outcome, as_json: bool, verb: str) -> int:  # noqa: ANN001 - host.de
     from host.deploy import DeployError
 
     if as_json:
-        print(json.dumps(outcome.as_dict(), default=str))
+        print(strict_json(outcome.as_dict(), default=str))
     else:
         for step in outcome.steps:
             mark = "ok    " if step.get("ok") else "FAILED"
@@ -133,7 +134,7 @@ def run_releases(args: argparse.Namespace) -> int:
     outcome = asyncio.run(list_releases(args.target, remote_python=args.remote_python))
     if args.json:
         print(
-            json.dumps(
+            strict_json(
                 {
                     "target": outcome.target,
                     "current": outcome.current,

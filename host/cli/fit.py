@@ -3,22 +3,34 @@
 from __future__ import annotations
 
 import argparse
-import json
+import warnings
 from pathlib import Path
 
 from edge.errors import DataError
-from host.cli.outputs import check_output
-from host.data import load_measurement
+from host.cli.options import read_measurement, read_options
+from host.cli.outputs import FIGURE_SUFFIXES, check_output, strict_json
+from host.data import Measurement
 from host.progress import Steps, wanted
-from host.workflow import Estimator, TestResult, make_estimator, save_bundle, score_on
+from host.workflow import Estimator, TestResult, make_estimator, save_bundle, score_on, warn_extrapolation
 from models_export.bundle import check_save_target
 
 
-def parse_units(text: str) -> tuple[str, str]:
-    parts = [p.strip() for p in text.split(",")]
-    if len(parts) != 2 or not all(parts):
-        raise DataError(f"--units {text!r} must be two names separated by a comma, e.g. --units bar,mm")
-    return parts[0], parts[1]
+class UnitsUnknownWarning(UserWarning):
+    """A bundle written without units for its input and output."""
+
+
+def bundle_units(train: Measurement) -> tuple[str, str]:
+    """(u, y) units for the bundle: from --units or the header; a warning names the fix when unknown."""
+    missing = [role for role in ("u", "y") if not train.unit(role)]
+    if missing:
+        warnings.warn(
+            f"--save without units: the {' and '.join(missing)} unit(s) of {Path(train.source).name} are unknown "
+            "(no --units, no suffix such as pressure_bar in the header), so the bundle says 'u'/'y' and the edge "
+            "will refuse it against a rig config in bar and mm; pass --units bar,mm",
+            UnitsUnknownWarning,
+            stacklevel=2,
+        )
+    return train.unit("u", "u"), train.unit("y", "y")
 
 
 def fit_record(args: argparse.Namespace, samples: int, estimator: Estimator, results: list[TestResult]) -> dict:
@@ -41,12 +53,16 @@ def fit_record(args: argparse.Namespace, samples: int, estimator: Estimator, res
 
 
 def run(args: argparse.Namespace) -> int:
-    units = parse_units(args.units)
+    read_options(args)  # a malformed --columns or --units is refused before any file is read
     if not 0 < args.calibration < 0.9:
         raise DataError(f"--calibration {args.calibration} must be between 0 and 0.9")
     if args.save:
         check_output(args.save, "--save", kind="dir")
         check_save_target(args.save)  # a foreign directory is refused before the fit, not after
+    if args.plot:
+        if not args.test:
+            raise DataError("--plot draws the --test recordings' loops; pass at least one --test CSV")
+        check_output(args.plot, "--plot", suffixes=FIGURE_SUFFIXES)
     estimator = make_estimator(
         args.model,
         operators=args.operators,
@@ -55,24 +71,32 @@ def run(args: argparse.Namespace) -> int:
     )
     with Steps(3 + len(args.test) + bool(args.save), wanted(args.json), f"pmactl fit {args.model}") as steps:
         steps.start(f"reading {Path(args.train).name}")
-        train = load_measurement(args.train)
+        train = read_measurement(args.train, args)
         tests = []
         for path in args.test:
             steps.start(f"reading {Path(path).name}")
-            tests.append(load_measurement(path))
+            tests.append(read_measurement(path, args))
+        extrapolating = warn_extrapolation(train.u, tests, train.unit("u"))
         steps.start(f"fitting on {len(train)} samples")
         estimator.fit(train.u, train.y)
         steps.start("scoring")
         results = score_on(estimator.model_, tests, args.calibration)
         if args.save:
             steps.start("writing the bundle")
+            units = bundle_units(train)
             save_bundle(estimator, train, args.save, units, fit_record(args, len(train), estimator, results))
+    if args.plot:
+        from host.demo_figures import plot_test_loops
+
+        plot_test_loops(Path(args.plot), args.model, tests, results, train.unit("u", "u"), train.unit("y", "y"))
     if args.json:
         print(
-            json.dumps(
+            strict_json(
                 {
                     "model": args.model,
                     "fit_seconds": estimator.fit_seconds_,
+                    "units": {"u": train.unit("u"), "y": train.unit("y")},
+                    "warnings": extrapolating,
                     "tests": [
                         {
                             "file": r.name,
@@ -93,14 +117,16 @@ def run(args: argparse.Namespace) -> int:
     for note in train.notes:
         print(f"  note: {note}")
     if results:
+        y_unit = f" [{train.unit('y')}]" if train.unit("y") else ""
         print(
-            f"{'test file':<28} {'scored':>7} {'start state':>11} {'offset':>9} {'RMSE':>9} {'% p-p':>7} {'max err':>9}"
+            f"{'test file':<28} {'scored':>7} {'start state':>11} {'offset' + y_unit:>12} {'RMSE' + y_unit:>12} "
+            f"{'% p-p':>7} {'max err' + y_unit:>14}"
         )
         for r in results:
             p, s = r.prediction, r.prediction.score
             print(
-                f"{r.name:<28} {s.samples:>7} {p.branch:>11} {p.offset:>9.4g} "
-                f"{s.rmse:>9.4g} {s.rmse_pct_pp:>7.2f} {s.max_error:>9.4g}"
+                f"{r.name:<28} {s.samples:>7} {p.branch:>11} {p.offset:>12.4g} "
+                f"{s.rmse:>12.4g} {s.rmse_pct_pp:>7.2f} {s.max_error:>14.4g}"
             )
         print(
             f"(start state and offset estimated on the first {args.calibration:.0%} of each test after the input "
@@ -108,6 +134,8 @@ def run(args: argparse.Namespace) -> int:
         )
     else:
         print("no --test given: pass held-out recordings with --test to score the model")
+    if args.plot:
+        print(f"measured vs model loops written to {args.plot}")
     if args.save:
         print(f"bundle written to {args.save}")
     return 0

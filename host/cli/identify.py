@@ -13,6 +13,8 @@ from __future__ import annotations
 import argparse
 import importlib
 
+from host.cli.options import add_data_options
+
 
 def _lazy(function: str):  # noqa: ANN202
     def run(args: argparse.Namespace) -> int:
@@ -52,6 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="do not fit a frequency-independent hysteresis loss angle beside K, T, L",
     )
+    add_data_options(fotd)
     fotd.add_argument("--json", action="store_true", help="print one JSON object")
     fotd.set_defaults(run=_lazy("run_fotd"))
 
@@ -72,6 +75,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--rest-length-mm", type=float, metavar="MM", help="rest length l0 [mm] (contraction ratio = y / l0)"
     )
     force.add_argument("--radius-mm", type=float, metavar="MM", help="tondu-lopez: inner radius r0 [mm] (area pi r0^2)")
+    force.add_argument(
+        "--columns",
+        metavar="ROLE=NAME,...",
+        help="the file's own names for p (or u), y and force (or load), e.g. p=pressure_bar,y=contraction_mm,"
+        "force=force_N (default: columns named so)",
+    )
     force.add_argument("--json", action="store_true", help="print one JSON object")
     force.set_defaults(run=_lazy("run_force"))
 

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import json
+
+from host.cli.outputs import strict_json
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
@@ -37,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
     target = np.concatenate([p[1] for p in pairs])
     report = quantise_bundle(args.bundle, features, target)
     if args.json:
-        print(json.dumps(report))
+        print(strict_json(report))
         return 0
     print(f"{'variant':<26} {'RMSE [bar]':>11} {'vs f32':>8} {'us/step':>8} {'cpu us/step':>11}")
     variants: dict[str, dict[str, float]] = report["variants"]  # type: ignore[assignment]

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import shlex
 import signal
 import sys
 from pathlib import Path
+
+from host.cli.outputs import strict_json
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -78,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
         "tables": [str(p) for p in result.tables],
     }
     if args.json:
-        print(json.dumps(summary))
+        print(strict_json(summary))
     else:
         print(
             f"{summary['cells']} cells: {counts['pass']} pass, {counts['fail']} fail, {counts['error']} error"
