@@ -12,8 +12,8 @@ joint: PID alone against PID + inverse-Preisach feedforward (:func:`joint_loop`)
 
 Everything goes to ``--out`` (default ``./pmactl-demo``; new, empty, or an earlier demo's
 folder, see :func:`demo_directory`): a bundle per model, the three tracking runs' telemetry and
-the figures ``loops.png`` (measured vs model loops) and ``tracking.png`` (the closed loop, all
-three controllers). Each result is printed as it finishes.
+the figures ``loops.png`` (measured vs model loops), ``tracking.png`` (the closed loop, all
+three controllers) and ``joint.png`` (the joint, both controllers). Each result is printed as it finishes.
 """
 
 from __future__ import annotations
@@ -157,13 +157,31 @@ def joint_loop(out: Path, say: Callable[[str], None]) -> list[dict[str, object]]
     ]
 
 
-def tracking_figure(out: Path, loop: list[dict[str, object]], reachable: tuple[float, float]) -> Path:
+def tracking_figure(
+    out: Path,
+    prefix: str,
+    keys: list[str],
+    loop: list[dict[str, object]],
+    reachable: tuple[float, float],
+    quantity: str = "contraction",
+    unit: str = "mm",
+) -> Path:
+    """``{prefix}.png`` from the telemetry ``{prefix}-{key}.pmt`` of each run in ``loop``."""
+    output = {"mm": ("reference_mm", "contraction_mm"), "deg": ("reference_deg", "angle_deg")}[unit]
     runs, rms = {}, {}
-    for key, row in zip(CONTROLLERS, loop):
-        record = read_telemetry(out / f"tracking-{key}.pmt")
-        runs[str(row["controller"])] = {c: record.column(c) for c in ("t", "reference_mm", "contraction_mm")}
+    for key, row in zip(keys, loop):
+        record = read_telemetry(out / f"{prefix}-{key}.pmt")
+        runs[str(row["controller"])] = {
+            "t": record.column("t"),
+            "reference": record.column(output[0]),
+            "output": record.column(output[1]),
+            "command_bar": record.column("u_bar"),
+            "pressure_bar": record.column("pressure_bar"),
+        }
+        if "valve_b_bar" in record.columns:
+            runs[str(row["controller"])]["command_b_bar"] = record.column("valve_b_bar")
         rms[str(row["controller"])] = float(row["rms_error"])  # type: ignore[arg-type]
-    return plot_tracking(out / "tracking.png", runs, SETTLE_S, reachable, rms)
+    return plot_tracking(out / f"{prefix}.png", runs, SETTLE_S, reachable, rms, quantity=quantity, unit=unit)
 
 
 DEMO_MARKER = ".pmactl-demo"  # written into --out: the demo replaces only its own files in a folder it made
@@ -227,7 +245,7 @@ def run(args: argparse.Namespace) -> int:
     say(f"tracking 30 sin(2 pi 0.2 t) + 40 mm for {TRACKING_S:g} s, scored after {SETTLE_S:g} s (pmactl edge run):")
     say(f"{'controller':<31} {'max [mm]':>9} {'mean |e| [mm]':>14} {'RMS [mm]':>9} {'faults':>7}")
     loop = closed_loop(out / "preisach", out, say)
-    tracking = tracking_figure(out, loop, reachable)
+    tracking = tracking_figure(out, "tracking", list(CONTROLLERS), loop, reachable)
     pid_rms, ff_rms, nn_rms = (float(row["rms_error"]) for row in loop)  # type: ignore[arg-type]
     say(f"Feedforward cuts the RMS error by {1 - ff_rms / pid_rms:.0%} (seed 000 reports 48 %); with the trained")
     say(f"correction the RMS error is {nn_rms / pid_rms:.2f}x PID alone. Tracking: {tracking}")
@@ -236,7 +254,9 @@ def run(args: argparse.Namespace) -> int:
     say(f"tracking 15 sin(2 pi 0.2 t) deg for {JOINT_S:g} s, scored after {SETTLE_S:g} s:")
     joint = joint_loop(out, say)
     joint_cut = 1 - float(joint[1]["rms_error"]) / float(joint[0]["rms_error"])  # type: ignore[arg-type]
-    say(f"Inverse-Preisach feedforward cuts the joint's RMS angle error by {joint_cut:.0%}.")
+    joint_reach = load_bundle(out / "joint").inverse.input_range
+    joint_figure = tracking_figure(out, "joint", ["pid", "feedforward"], joint, joint_reach, "joint angle", "deg")
+    say(f"Inverse-Preisach feedforward cuts the joint's RMS angle error by {joint_cut:.0%}. Joint: {joint_figure}")
     say(f"Everything is in {out}/ (bundles, telemetry, figures); delete it when done.")
     if args.json:
         report = {
@@ -246,7 +266,7 @@ def run(args: argparse.Namespace) -> int:
             "correction": trained.as_dict(),
             "closed_loop": loop,
             "joint": joint,
-            "figures": [str(loops), str(tracking)],
+            "figures": [str(loops), str(tracking), str(joint_figure)],
             "warnings": [reach] if reach else [],
         }
         print(strict_json(report, indent=2))
