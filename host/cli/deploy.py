@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
 from host.cli.outputs import strict_json
+
+if TYPE_CHECKING:
+    from host.deploy.deploy import Outcome
 
 TARGET_HELP = "a directory, or ssh://[user@]host[:port]/path (uses ~/.ssh/config, ssh-agent, known_hosts)"
 
@@ -56,7 +60,7 @@ def _common(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _report(outcome, as_json: bool, verb: str) -> int:  # noqa: ANN001 - host.deploy.deploy.Outcome
+def _report(outcome: Outcome, as_json: bool, verb: str) -> int:
     from host.deploy import DeployError
 
     if as_json:

@@ -5,14 +5,51 @@ from __future__ import annotations
 import argparse
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from edge.errors import DataError
-from host.cli.options import read_measurement, read_options
+from host.cli.lazy import lazy
+from host.cli.options import add_data_options, add_fit_options, read_measurement, read_options
 from host.cli.outputs import FIGURE_SUFFIXES, check_output, strict_json
-from host.data import Measurement
-from host.progress import Steps, wanted
-from host.workflow import Estimator, TestResult, make_estimator, save_bundle, score_on, warn_extrapolation
-from models_export.bundle import check_save_target
+
+if TYPE_CHECKING:
+    from host.data import Measurement
+    from host.workflow import Estimator, TestResult
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
+    """Add ``pmactl fit``."""
+    fit = sub.add_parser("fit", help="identify a hysteresis model from a measured-data CSV")
+    add_fit_options(fit)
+    fit.add_argument(
+        "--parameterisation",
+        choices=["free", "exponential"],
+        default="free",
+        help="pi and mpi: free play weights or seed 000's beta/delta/mu form",
+    )
+    fit.add_argument(
+        "--preisach-method",
+        choices=["lsq", "forc"],
+        default="lsq",
+        help="preisach only: least squares on any data, or first-order reversal curves",
+    )
+    fit.add_argument(
+        "--calibration",
+        type=float,
+        default=0.1,
+        metavar="FRACTION",
+        help="share of each test record (after it starts moving) used to estimate its "
+        "initial state and offset; never scored (default 0.1)",
+    )
+    add_data_options(fit)
+    fit.add_argument(
+        "--plot", metavar="OUT.png", help="write measured vs model loops of each --test here (.png, .pdf or .svg)"
+    )
+    fit.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    fit.add_argument(
+        "--save", metavar="DIR", help="write the lookup-table bundle (model + inverse) here; its parent must exist"
+    )
+    fit.set_defaults(run=lazy("host.cli.fit"))
 
 
 class UnitsUnknownWarning(UserWarning):
@@ -53,6 +90,10 @@ def fit_record(args: argparse.Namespace, samples: int, estimator: Estimator, res
 
 
 def run(args: argparse.Namespace) -> int:
+    from host.progress import Steps, wanted
+    from host.workflow import make_estimator, save_bundle, score_on, warn_extrapolation
+    from models_export.bundle import check_save_target
+
     read_options(args)  # a malformed --columns or --units is refused before any file is read
     if not 0 < args.calibration < 0.9:
         raise DataError(f"--calibration {args.calibration} must be between 0 and 0.9")

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import argparse
 
+from host.cli.lazy import lazy
 from host.cli.outputs import strict_json
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
     """Add ``pmactl quantise`` to the command line."""
-    from host.cli import _lazy
-
     quantise = sub.add_parser(
         "quantise", help="measure int8 variants of a bundle's correction; keep one only if as accurate and faster"
     )
@@ -23,7 +22,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
         help="recording (t,u,y) for calibration and scoring",
     )
     quantise.add_argument("--json", action="store_true", help="print one JSON object")
-    quantise.set_defaults(run=_lazy("host.cli.quantise"))
+    quantise.set_defaults(run=lazy("host.cli.quantise"))
 
 
 def run(args: argparse.Namespace) -> int:

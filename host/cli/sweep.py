@@ -8,8 +8,12 @@ import shlex
 import signal
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from host.cli.outputs import strict_json
+
+if TYPE_CHECKING:
+    from host.sweep.matrix import Matrix
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -97,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
     return 0 if counts["pass"] == len(matrix.cells) else 1
 
 
-def _list(matrix) -> int:  # noqa: ANN001
+def _list(matrix: Matrix) -> int:
     print(f"{matrix.name}: {len(matrix.cells)} cells of kind {matrix.kind.name}; axes {', '.join(matrix.axes)}")
     for cell in matrix.cells:
         labels = ", ".join(f"{k}={v}" for k, v in cell.labels.items() if k != "seed")

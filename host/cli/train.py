@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from edge.errors import DataError
+from host.cli.lazy import lazy
 from host.cli.options import add_data_options, read_measurement, read_options
 from host.cli.outputs import OutputPathError, check_output, strict_json
 
@@ -15,9 +16,9 @@ DEFAULT_EPOCHS = {"hammerstein": 60, "lstm-narmax": 150, "correction": 300}
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
     """Add ``pmactl train`` to the command line."""
-    from host.cli import _lazy
-
-    train = sub.add_parser("train", help="train a neural hysteresis model (torch) or the edge's correction")
+    train = sub.add_parser(
+        "train", help="train a neural hysteresis model (torch: the train extra) or the edge's correction (no torch)"
+    )
     train.add_argument(
         "--model",
         required=True,
@@ -44,7 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
     train.add_argument("--json", action="store_true", help="print one JSON object (no progress bar)")
     train.add_argument("--save", metavar="DIR", help="write step.onnx, model.json, operator.npz, training_curve.png")
     add_data_options(train)
-    train.set_defaults(run=_lazy("host.cli.train"))
+    train.set_defaults(run=lazy("host.cli.train"))
 
 
 def run(args: argparse.Namespace) -> int:
