@@ -75,7 +75,9 @@ class FOTDFit:
         """The model's ``G(j 2 pi f)``, the hysteresis loss angle included when fitted."""
         omega = 2 * np.pi * np.asarray(frequency_hz, float)
         rotation = np.exp(-1j * (self.hysteresis_loss_angle_rad or 0.0))
-        return fotd_response(omega, self.gain, self.time_constant_s, self.dead_time_s) * rotation
+        return np.asarray(
+            fotd_response(omega, self.gain, self.time_constant_s, self.dead_time_s) * rotation, np.complex128
+        )
 
     def as_dict(self) -> dict[str, object]:
         """The JSON form printed by ``pmactl identify fotd --json``."""
@@ -116,12 +118,12 @@ def fotd_response(
     omega: NDArray[np.float64], gain: float, time_constant_s: float, dead_time_s: float
 ) -> NDArray[np.complex128]:
     """``K e^{-j w L} / (1 + j w T)`` at angular frequencies ``omega`` [rad/s]."""
-    return gain * np.exp(-1j * omega * dead_time_s) / (1.0 + 1j * omega * time_constant_s)
+    return np.asarray(gain * np.exp(-1j * omega * dead_time_s) / (1.0 + 1j * omega * time_constant_s), np.complex128)
 
 
 def _standard_errors(jacobian: NDArray[np.float64], scale: float) -> NDArray[np.float64]:
     covariance = np.linalg.pinv(jacobian.T @ jacobian) * scale
-    return np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+    return np.asarray(np.sqrt(np.clip(np.diag(covariance), 0.0, None)), dtype=np.float64)
 
 
 FREQUENCY_TOLERANCE = 0.02  # relative: two runs "at 0.5 Hz" are estimated a few 0.01 % apart
@@ -235,7 +237,7 @@ def simulate_fotd(
         a = np.exp(-dt / time_constant_s)
         drive = np.concatenate([[delayed[0]], 0.5 * (delayed[1:] + delayed[:-1])]) - u[0]
         state = lfilter([1.0 - a], [1.0, -a], drive, zi=[a * 0.0])[0] + u[0]
-    return gain * (state - u[0])
+    return np.asarray(gain * (state - u[0]), dtype=np.float64)
 
 
 def fit_time_response(records: list[Measurement]) -> FOTDFit:
