@@ -149,3 +149,13 @@ def test_train_warns_before_training_when_the_test_input_leaves_the_training_ran
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert "outside the training range 0..2 bar" in err and "training reached" in err
+
+
+def test_a_glob_of_runs_is_expanded_and_an_empty_one_named(lab, tmp_path, capsys):
+    for k in range(2):
+        (tmp_path / f"test{k}.csv").write_bytes(lab["test"].read_bytes())
+    argv = ["fit", "--model", "pi", "--train", str(lab["train"]), *COLUMNS, "--json"]
+    assert main([*argv, "--test", str(tmp_path / "test*.csv")]) == 0
+    assert [t["file"] for t in json.loads(capsys.readouterr().out)["tests"]] == ["test0.csv", "test1.csv"]
+    assert main([*argv, "--test", str(tmp_path / "nothing*.csv")]) == 2
+    assert "no file matches the pattern" in capsys.readouterr().err

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 from edge.errors import DataError
 from host.cli.lazy import lazy
-from host.cli.options import add_data_options, add_fit_options, read_measurement, read_options
+from host.cli.options import add_data_options, add_fit_options, expand_runs, read_measurement, read_options
 from host.cli.outputs import FIGURE_SUFFIXES, check_output, strict_json
 
 if TYPE_CHECKING:
@@ -110,6 +110,7 @@ def run(args: argparse.Namespace) -> int:
         parameterisation=args.parameterisation,
         preisach_method=args.preisach_method,
     )
+    args.test = expand_runs(args.test, "--test")
     with Steps(3 + len(args.test) + bool(args.save), wanted(args.json), f"pmactl fit {args.model}") as steps:
         steps.start(f"reading {Path(args.train).name}")
         train = read_measurement(args.train, args)

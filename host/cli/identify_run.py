@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from edge.errors import DataError
-from host.cli.options import read_measurement
+from host.cli.options import expand_runs, read_measurement
 from host.cli.outputs import strict_json
 from host.data import Measurement
 
@@ -58,7 +58,7 @@ def _fotd_record(path: str, args: argparse.Namespace) -> Measurement:
 def run_fotd(args: argparse.Namespace) -> int:
     from host.identify.fotd import identify_fotd
 
-    records = [_fotd_record(p, args) for p in args.runs]
+    records = [_fotd_record(p, args) for p in expand_runs(args.runs, "RUN.csv")]
     fit = identify_fotd(records, args.method, hysteresis_phase=not args.no_hysteresis_phase)
     u_unit, y_unit = records[0].unit("u", "unit u"), records[0].unit("y", "unit y")
     if args.json:

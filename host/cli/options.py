@@ -121,3 +121,23 @@ def read_measurement(path: str, args: argparse.Namespace) -> Measurement:
     from host.data import load_measurement
 
     return load_measurement(path, options=read_options(args))
+
+
+def expand_runs(paths: list[str], option: str) -> list[str]:
+    """``paths`` with glob patterns (``runs/*.csv``) expanded, sorted, for commands that take several
+    runs; a pattern that matches nothing is refused with the option named (the shell would pass it
+    on as a file name, and Windows shells do not expand it at all)."""
+    import glob
+
+    from edge.errors import DataError
+
+    expanded: list[str] = []
+    for path in paths:
+        if glob.has_magic(path):
+            matches = sorted(glob.glob(path))
+            if not matches:
+                raise DataError(f"{option} {path}: no file matches the pattern; check the folder and the name")
+            expanded += matches
+        else:
+            expanded.append(path)
+    return expanded

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from host.cli.lazy import lazy
+from host.cli.options import add_data_options, expand_runs, read_measurement
 from host.cli.outputs import strict_json
 
 
@@ -22,17 +23,18 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
         help="recording (t,u,y) for calibration and scoring",
     )
     quantise.add_argument("--json", action="store_true", help="print one JSON object")
+    add_data_options(quantise, units=False)
     quantise.set_defaults(run=lazy("host.cli.quantise"))
 
 
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from host.data import load_measurement
     from host.train.correction import correction_features
     from models_export.quantise import quantise_bundle
 
-    pairs = [correction_features(args.bundle, load_measurement(path)) for path in args.calibration]
+    paths = expand_runs(args.calibration, "--calibration")
+    pairs = [correction_features(args.bundle, read_measurement(path, args)) for path in paths]
     features = np.concatenate([p[0] for p in pairs])
     target = np.concatenate([p[1] for p in pairs])
     report = quantise_bundle(args.bundle, features, target)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from edge.errors import DataError
 from host.cli.lazy import lazy
-from host.cli.options import add_data_options, read_measurement, read_options
+from host.cli.options import add_data_options, expand_runs, read_measurement, read_options
 from host.cli.outputs import OutputPathError, check_output, strict_json
 
 DEFAULT_EPOCHS = {"hammerstein": 60, "lstm-narmax": 150, "correction": 300}
@@ -50,6 +50,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
 
 def run(args: argparse.Namespace) -> int:
     read_options(args)  # a malformed --columns or --units is refused before any file is read
+    args.train, args.test = expand_runs(args.train, "--train"), expand_runs(args.test, "--test")
     if args.epochs is not None and args.epochs < 1:
         raise DataError(f"--epochs {args.epochs} must be at least 1")
     if args.epochs is None:
