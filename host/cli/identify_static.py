@@ -113,7 +113,10 @@ def run_maxwell_slip(args: argparse.Namespace) -> int:
         print(f"  {'elements':>8} {'held-out RMSE':>14} {'% of range':>10}")
         for row in result.scan:
             print(f"  {row['elements']:>8} {row['test_rmse']:>14.4g} {row['test_rmse_pct']:>10.2f}")
-    print(f"  {'stiffness [N/unit]':>20} {'break force [N]':>16}")
+    from host.data_format import header_unit
+
+    position_unit = header_unit(args.position_column) or "unit of x"
+    print(f"  {f'stiffness [N/{position_unit}]':>20} {'break force [N]':>16}")
     for k, f in zip(result.model.stiffness_, result.model.break_force_):
         print(f"  {k:>20.5g} {f:>16.5g}")
     print(f"  offset {result.model.offset_:.5g} N; {result.note}")
