@@ -9,6 +9,12 @@ sample periods (two recordings in one file: resampling across it would invent mi
 samples). A UTF-8 byte-order mark (Excel's "CSV UTF-8") and quoted numbers are read as such.
 Irregular sampling beyond ``tolerance`` (relative spread of the time step) is either resampled
 onto a uniform grid at the median step, with a warning saying so, or refused.
+
+Files as labs write them (:mod:`host.data_format`): the delimiter (``,`` ``;`` tab) and a decimal
+comma are sniffed, ``ReadOptions.columns`` maps the file's own names to t/u/y/load/..., a unit
+suffix in the header (``time_ms``, ``length [mm]``) or ``ReadOptions.units`` gives the units
+(time is converted to seconds), and a time column without a unit whose step looks like
+milliseconds or sample numbers is refused with the fix (``--time-unit ms``).
 """
 
 from __future__ import annotations
@@ -23,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from edge.errors import DataError
+from host.data_format import ReadOptions, check_seconds, header_stem, sniff_layout, time_scale
 
 REQUIRED = ("t", "u", "y")
 OPTIONAL = ("load", "temperature", "p")
@@ -45,6 +52,7 @@ class Measurement:
         extras: optional columns present in the file (``load``, ``temperature``, ``p``, ...).
         source: where it came from (file path or a description).
         notes: what the loader changed, e.g. resampling.
+        units: role (``t``, ``u``, ``y``, an extra's name) -> unit, where known (``t`` is always s).
     """
 
     t: NDArray[np.float64]
@@ -53,6 +61,11 @@ class Measurement:
     extras: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     source: str = "<memory>"
     notes: list[str] = field(default_factory=list)
+    units: dict[str, str] = field(default_factory=dict)
+
+    def unit(self, role: str, default: str = "") -> str:
+        """The unit of ``role`` for a printed table or a figure label (``default`` when unknown)."""
+        return self.units.get(role, default)
 
     @property
     def dt(self) -> float:
@@ -72,18 +85,11 @@ class Measurement:
             {k: v[part] for k, v in self.extras.items()},
             self.source,
             list(self.notes),
+            dict(self.units),
         )
 
 
-def _read_header(path: Path) -> list[str]:
-    try:
-        with path.open(newline="", encoding="utf-8-sig") as handle:  # -sig: Excel's "CSV UTF-8" BOM
-            header = next(csv.reader(handle), None)
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DataError(f"{path}: cannot read file ({exc}); check the path and that it is a text CSV") from exc
-    if not header:
-        raise DataError(f"{path}: file is empty; expected a CSV header with columns t,u,y")
-    columns = [h.strip() for h in header]
+def _check_duplicates(path: Path, columns: list[str]) -> None:
     seen: dict[str, int] = {}
     for number, name in enumerate(columns, start=1):
         if name and name in seen:
@@ -92,10 +98,35 @@ def _read_header(path: Path) -> list[str]:
                 "rename or delete one"
             )
         seen[name] = number
-    return columns
 
 
-def _read_table(path: Path, width: int) -> tuple[NDArray[np.float64], NDArray[np.int64] | None]:
+def _roles(path: Path, header: list[str], mapping: dict[str, str]) -> list[str]:
+    """The header with the user's names replaced by their roles (``--columns``; a name that is a
+    role plus a unit, such as ``u_bar``, takes that role when no column is named so)."""
+    missing = [f"{role}={name}" for role, name in mapping.items() if name not in header]
+    if missing:
+        raise DataError(
+            f"{path}: --columns {', '.join(missing)}: no such column; found {header}. Give the names as in the header"
+        )
+    by_name = {name: role for role, name in mapping.items()}
+    for role in (*REQUIRED, *OPTIONAL):  # "u_bar" or "y [mm]" is u or y when nothing else is
+        stems = [h for h in header if header_stem(h) == role]
+        if role not in mapping and role not in header and len(stems) == 1 and stems[0] not in by_name:
+            by_name[stems[0]] = role
+    taken = set(by_name.values())
+    # a column already named like a mapped role keeps its data under another name
+    return [by_name.get(h, f"{h}_unmapped" if h in taken else h) for h in header]
+
+
+def _decimal_points(path: Path) -> list[str]:
+    """The file's lines with decimal commas made points (the delimiter is then ';' or tab)."""
+    with path.open(encoding="utf-8-sig") as handle:
+        return [line.replace(",", ".") for line in handle]
+
+
+def _read_table(
+    path: Path, width: int, delimiter: str = ",", decimal_comma: bool = False
+) -> tuple[NDArray[np.float64], NDArray[np.int64] | None]:
     """Numeric rows and their file line numbers; a row with the wrong number of fields is refused.
 
     numpy's C parser reads well-formed files (quoted numbers included); anything it rejects is
@@ -105,13 +136,14 @@ def _read_table(path: Path, width: int) -> tuple[NDArray[np.float64], NDArray[np
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # "input contained no data" is handled below
+            source = _decimal_points(path) if decimal_comma else path
             table = np.loadtxt(
-                path, delimiter=",", skiprows=1, quotechar='"', encoding="utf-8-sig", ndmin=2, comments="#"
+                source, delimiter=delimiter, skiprows=1, quotechar='"', encoding="utf-8-sig", ndmin=2, comments="#"
             )
     except (ValueError, IndexError):
-        return _read_rows_one_by_one(path, width)
+        return _read_rows_one_by_one(path, width, delimiter, decimal_comma)
     if table.size and table.shape[1] != width:
-        return _read_rows_one_by_one(path, width)
+        return _read_rows_one_by_one(path, width, delimiter, decimal_comma)
     return table, None  # line numbers only when a message needs them: see _data_lines
 
 
@@ -123,11 +155,13 @@ def _data_lines(path: Path) -> NDArray[np.int64]:
     return np.array(numbers, dtype=np.int64)
 
 
-def _read_rows_one_by_one(path: Path, width: int) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+def _read_rows_one_by_one(
+    path: Path, width: int, delimiter: str = ",", decimal_comma: bool = False
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     values: list[list[float]] = []
     lines: list[int] = []
     with path.open(newline="", encoding="utf-8-sig") as handle:
-        reader = csv.reader(handle)
+        reader = csv.reader(handle, delimiter=delimiter)
         next(reader, None)
         for row in reader:
             if not row or all(not cell.strip() for cell in row) or row[0].lstrip().startswith("#"):
@@ -137,7 +171,7 @@ def _read_rows_one_by_one(path: Path, width: int) -> tuple[NDArray[np.float64], 
                     f"{path}: line {reader.line_num} has {len(row)} field(s) but the header has {width}; "
                     "fix or delete that line (a cut-off or merged row?)"
                 )
-            values.append([_number(cell) for cell in row])
+            values.append([_number(cell.replace(",", ".") if decimal_comma else cell) for cell in row])
             lines.append(reader.line_num)
     return np.array(values, dtype=float).reshape(-1, width), np.array(lines, dtype=np.int64)
 
@@ -173,6 +207,7 @@ def load_measurement(
     tolerance: float = 0.05,
     min_samples: int = 10,
     max_gap_periods: float = MAX_GAP_PERIODS,
+    options: ReadOptions | None = None,
 ) -> Measurement:
     """Load and validate a measured-data CSV (see module docstring).
 
@@ -183,16 +218,24 @@ def load_measurement(
         min_samples: fewer rows than this is an error.
         max_gap_periods: a time step longer than this many median steps is a split record
             (two recordings in one file), refused with its position.
+        options: the file's layout as the user gave it (column names, time unit, units).
     """
     path = Path(path)
-    columns = _read_header(path)
+    options = options or ReadOptions()
+    layout = sniff_layout(path)
+    _check_duplicates(path, layout.header)
+    columns = _roles(path, layout.header, options.columns)
     missing = [c for c in REQUIRED if c not in columns]
     if missing:
         raise DataError(
-            f"{path}: column(s) {', '.join(repr(m) for m in missing)} missing; found {columns}. "
-            "Rename the columns to t [s], u (input), y (output)"
+            f"{path}: column(s) {', '.join(repr(m) for m in missing)} missing; found {layout.header}. "
+            "Name them with --columns, e.g. --columns t=time_s,u=pressure_bar,y=length_mm "
+            "(or rename the columns to t [s], u (input), y (output))"
         )
-    table, parsed_lines = _read_table(path, len(columns))
+    units = {role: layout.units[name] for role, name in zip(columns, layout.header) if name in layout.units}
+    units.update(options.units)
+    time_unit = options.time_unit or units.get("t")
+    table, parsed_lines = _read_table(path, len(columns), layout.delimiter, layout.decimal_comma)
     lines = parsed_lines if parsed_lines is not None else _LazyLines(path)
     if table.size == 0:
         raise DataError(f"{path}: no data rows below the header; check the file is complete")
@@ -223,7 +266,7 @@ def load_measurement(
         )
     if len(core) < min_samples:
         raise DataError(f"{path}: only {len(core)} samples; need at least {min_samples}")
-    t = data["t"]
+    t = data["t"] * time_scale(time_unit, str(path))
     steps = np.diff(t)
     if np.any(steps <= 0):
         first = int(np.argmax(steps <= 0))
@@ -232,6 +275,10 @@ def load_measurement(
             f"(t={t[first]:g} then {t[first + 1]:g}); sort the rows and drop duplicates"
         )
     median = float(np.median(steps))
+    if time_unit is None:
+        time_name = layout.header[columns.index("t")]
+        check_seconds(median, bool(np.all(t == np.round(t))), str(path), time_name)
+    units["t"] = "s"
     gap = int(np.argmax(steps))
     if steps[gap] > max_gap_periods * median:
         raise DataError(
@@ -239,7 +286,8 @@ def load_measurement(
             f"between file lines {lines[gap]} and {lines[gap + 1]} (t={t[gap]:g} -> {t[gap + 1]:g}): "
             "two recordings in one file; split it there and use each part on its own"
         )
-    measurement = Measurement(t, data["u"], data["y"], {c: data[c] for c in wanted if c not in REQUIRED}, str(path))
+    extras = {c: data[c] for c in wanted if c not in REQUIRED}
+    measurement = Measurement(t, data["u"], data["y"], extras, str(path), [], units)
     return _uniform(measurement, irregular, tolerance)
 
 
@@ -262,5 +310,5 @@ def _uniform(m: Measurement, irregular: str, tolerance: float) -> Measurement:
     warnings.warn(f"{m.source}: {note}", ResampledWarning, stacklevel=3)
     extras = {k: np.interp(t_new, m.t, v) for k, v in m.extras.items()}
     return Measurement(
-        t_new, np.interp(t_new, m.t, m.u), np.interp(t_new, m.t, m.y), extras, m.source, [*m.notes, note]
+        t_new, np.interp(t_new, m.t, m.u), np.interp(t_new, m.t, m.y), extras, m.source, [*m.notes, note], m.units
     )

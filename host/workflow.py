@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 
 from edge.errors import ModelError
 from edge.hysteresis.base import HysteresisModel
@@ -136,3 +137,35 @@ def reference_beyond_reach(
         f"{reachable[0]:.1f}..{reachable[1]:.1f} {unit} ({outside:.0%} of the time outside): the feedforward "
         "clips there and the PID must do the rest; lower the amplitude or offset, or fit on data that reaches further"
     )
+
+
+class ExtrapolationWarning(UserWarning):
+    """A held-out recording whose input leaves the range the model was trained on."""
+
+
+EXTRAPOLATION_MARGIN = 0.01  # share of the training input's span tolerated beyond its ends (sensor noise)
+
+
+def warn_extrapolation(train_u: NDArray[np.float64], tests: list[Measurement], unit: str = "") -> list[str]:
+    """Warn for each test whose input goes outside ``train_u``'s range; the messages said.
+
+    A hysteresis model or a net identified on ``min..max`` of the training input has no data
+    beyond it, so its score there measures extrapolation, not the fit.
+    """
+    low, high = float(train_u.min()), float(train_u.max())
+    margin = EXTRAPOLATION_MARGIN * max(high - low, 1e-12)
+    messages = []
+    for m in tests:
+        outside = (m.u < low - margin) | (m.u > high + margin)
+        if not outside.any():
+            continue
+        suffix = f" {unit}" if unit else ""
+        span = f"{float(m.u.min()):.4g}..{float(m.u.max()):.4g}{suffix}"
+        message = (
+            f"{m.source}: {outside.mean():.0%} of the test input ({span}) "
+            f"lies outside the training range {low:.4g}..{high:.4g}{suffix}: the model extrapolates there; train on a "
+            "record that covers the test's range"
+        )
+        warnings.warn(message, ExtrapolationWarning, stacklevel=2)
+        messages.append(message)
+    return messages

@@ -31,7 +31,7 @@ def test_help_lists_the_subcommands():
 def test_fit_json_has_the_documented_keys(capsys):
     assert main(["fit", "--model", "pi", "--train", TRAIN, "--test", TEST, "--test", TEST, "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
-    assert set(report) == {"model", "fit_seconds", "tests"}
+    assert set(report) == {"model", "fit_seconds", "units", "warnings", "tests"}
     assert report["model"] == "pi" and report["fit_seconds"] > 0
     assert len(report["tests"]) == 2
     assert set(report["tests"][0]) == {"file", "rmse", "rmse_pct_pp", "max_error"}
@@ -98,7 +98,11 @@ def demo(tmp_path_factory):
     out = tmp_path_factory.mktemp("demo") / "out"
     result = run_pmactl("demo", "--out", str(out), "--json")
     assert result.returncode == 0, result.stderr
-    return json.loads(result.stdout), result.stderr, out
+    return json.loads(result.stdout, parse_constant=_not_json), result.stderr, out
+
+
+def _not_json(name: str) -> None:
+    raise AssertionError(f"pmactl demo --json wrote {name}, which is not JSON (non-finite numbers are null)")
 
 
 def test_demo_lookup_tables_match_their_reference_models(demo):
@@ -146,7 +150,7 @@ def test_demo_joint_feedforward_halves_the_angle_error(demo):
 
 def test_demo_writes_its_figures_and_bundles_into_out(demo):
     report, _, out = demo
-    assert sorted(Path(f).name for f in report["figures"]) == ["loops.png", "tracking.png"]
+    assert sorted(Path(f).name for f in report["figures"]) == ["joint.png", "loops.png", "tracking.png"]
     assert all(Path(f).stat().st_size > 10_000 and Path(f).parent == out for f in report["figures"])
     assert {p.name for p in out.iterdir()} >= {"pi", "mpi", "dpi", "preisach", "tracking-pid.pmt"}
 

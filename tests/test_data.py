@@ -90,7 +90,12 @@ def test_irregular_sampling_can_be_refused(tmp_path):
 
 @pytest.mark.parametrize(
     "content, message",
-    [("", "file is empty"), ("t,u,y\n0,1,2\n0.1,1,2\n", "only 2 samples"), ("t;u;y\n0;1;2\n", "missing")],
+    [
+        ("", "file is empty"),
+        ("t,u,y\n0,1,2\n0.1,1,2\n", "only 2 samples"),
+        ("t;u;y\n0;1;2\n", "only 1 samples"),
+        ("a;b\n0;1\n", "missing.*--columns"),
+    ],
 )
 def test_unusable_files(tmp_path, content, message):
     with pytest.raises(DataError, match=message):

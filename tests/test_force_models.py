@@ -123,3 +123,17 @@ def test_a_radius_that_is_not_a_finite_positive_number_is_refused(tmp_path, caps
     assert main([*argv, f"--radius-mm={value}"]) == 2
     err = capsys.readouterr().err
     assert "--radius-mm" in err and "must be a finite positive number" in err
+
+
+def test_force_columns_under_the_labs_own_names_are_mapped_with_the_option_the_error_names(tmp_path, capsys):
+    p, eps, force = sarosi_data(4)
+    path = tmp_path / "lab.csv"
+    path.write_text("pressure_bar;contraction_mm;force_N\n" + "".join(
+        f"{a:.5f};{400 * b:.5f};{c:.4f}\n".replace(".", ",") for a, b, c in zip(p, eps, force)))  # fmt: skip
+    argv = ["identify", "force", str(path), "--model", "sarosi", "--rest-length-mm", "400", "--json"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "--columns p=NAME,y=NAME,force=NAME" in err
+    assert main([*argv, "--columns", "p=pressure_bar,y=contraction_mm,force=force_N"]) == 0
+    fitted = json.loads(capsys.readouterr().out)
+    assert fitted["rmse_n"] < 5.0

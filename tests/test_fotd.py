@@ -107,7 +107,7 @@ def test_one_run_per_frequency_is_pooled():
     runs = [measurement.slice(int(a / measurement.dt), int(b / measurement.dt)) for a, b in zip(cuts[:-1], cuts[1:])]
     assert all(len(harmonics_of(r.t, r.u, r.y)) == 1 for r in runs)
     # one frequency alone cannot identify three parameters
-    with pytest.raises(ValueError, match="at least 2 frequencies"):
+    with pytest.raises(ValueError, match="need at least 2 frequencies|need at least 3"):
         identify_fotd(runs[:1], method="harmonic")
     fit = identify_fotd(runs, method="harmonic", hysteresis_phase=False)
     assert len(fit.harmonics) == len(FREQUENCIES_HZ)
@@ -182,7 +182,7 @@ def test_cli_fotd_json_and_a_one_frequency_error(tmp_path, capsys):
     np.savetxt(one, np.column_stack([t, np.sin(t), np.sin(t - 0.2)]), delimiter=",", header="t,u,y", comments="")
     assert main(["identify", "fotd", str(one), "--method", "harmonic"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "at least 2 frequencies" in err[0]
+    assert len(err) == 1 and "need at least 3 frequencies" in err[0]
 
 
 def test_real_inflation_runs_fall_back_to_the_time_fit(shared_data):
@@ -214,3 +214,27 @@ def test_hil_dead_time_with_other_valve_lags(valve_s, dead_s):
     truth = equivalent_fotd(params, amplitude_bar=fit.harmonics[0].input_amplitude)
     assert abs(fit.dead_time_s - truth.dead_time_s) <= dead_time_tolerance(truth.dead_time_s)
     assert fit.time_constant_s >= 0.9 * truth.time_constant_s
+
+
+def test_two_runs_at_one_frequency_are_one_frequency_and_refused(tmp_path, capsys):
+    t = np.arange(0, 40, 0.01)
+    paths = []
+    for k, shift in enumerate((0.0, 0.3)):  # the same 0.5 Hz twice, estimated a hair apart
+        path = tmp_path / f"run{k}.csv"
+        u = 2 + np.sin(2 * np.pi * 0.5 * (t + shift))
+        y = 10 + 5 * np.sin(2 * np.pi * 0.5 * (t + shift) - 0.4)
+        np.savetxt(path, np.column_stack([t, u, y]), delimiter=",", header="t,u,y", comments="")
+        paths.append(str(path))
+    assert main(["identify", "fotd", *paths, "--method", "harmonic"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "1 distinct frequency" in err[0] and "count once" in err[0]
+
+
+def test_two_frequencies_do_not_carry_the_loss_angle_too(tmp_path):
+    measurement, _ = hammerstein_fotd(5, 2.0, 0.05, 0.07)
+    windows = harmonics_of(measurement.t, measurement.u, measurement.y)
+    two = measurement.slice(0, int((windows[1].stop_s + windows[2].start_s) / 2 / measurement.dt))
+    with pytest.raises(ValueError, match="need at least 3 .*--no-hysteresis-phase"):
+        identify_fotd([two], method="harmonic")
+    fit = identify_fotd([two])  # auto: without the loss angle, said in a note
+    assert fit.hysteresis_loss_angle_rad is None and "without the hysteresis loss angle" in fit.notes[0]

@@ -6,6 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
+from host.cli.outputs import strict_json
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     keygen = sub.add_parser("keygen", help="make an Ed25519 key pair for signing bundles")
@@ -122,7 +124,7 @@ def _range(values: object, unit: str) -> str:
 def run_inspect(args: argparse.Namespace) -> int:
     record = describe(args.directory)
     if args.json:
-        print(json.dumps(record, indent=2))
+        print(strict_json(record, indent=2))
         return 0
     units = record["units"]
     assert isinstance(units, dict)

@@ -3,7 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import json
+from typing import TYPE_CHECKING
+
+from host.cli.outputs import strict_json
+
+if TYPE_CHECKING:
+    from host.deploy.deploy import Outcome
 
 TARGET_HELP = "a directory, or ssh://[user@]host[:port]/path (uses ~/.ssh/config, ssh-agent, known_hosts)"
 
@@ -55,11 +60,11 @@ def _common(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _report(outcome, as_json: bool, verb: str) -> int:  # noqa: ANN001 - host.deploy.deploy.Outcome
+def _report(outcome: Outcome, as_json: bool, verb: str) -> int:
     from host.deploy import DeployError
 
     if as_json:
-        print(json.dumps(outcome.as_dict(), default=str))
+        print(strict_json(outcome.as_dict(), default=str))
     else:
         for step in outcome.steps:
             mark = "ok    " if step.get("ok") else "FAILED"
@@ -133,7 +138,7 @@ def run_releases(args: argparse.Namespace) -> int:
     outcome = asyncio.run(list_releases(args.target, remote_python=args.remote_python))
     if args.json:
         print(
-            json.dumps(
+            strict_json(
                 {
                     "target": outcome.target,
                     "current": outcome.current,

@@ -16,8 +16,14 @@ from typing import NoReturn
 
 from edge.errors import PmactlError
 
-HOST_ONLY_MODULES = {"scipy", "matplotlib", "torch", "tqdm", "onnx"}
-EDGE_MODULES = {"onnxruntime", "smbus2", "serial", "gpiod", "threadpoolctl"}
+# the extra that brings each optional module (import name -> extra)
+EXTRA_OF_MODULE = {
+    **dict.fromkeys(("scipy", "matplotlib", "tqdm", "onnx", "asyncssh"), "host"),
+    **dict.fromkeys(("onnxruntime", "smbus2", "serial", "gpiod", "threadpoolctl", "cryptography", "mcap"), "edge"),
+    "torch": "train",
+    "ray": "cluster",
+    "mkdocs": "docs",
+}
 
 _OS_FIXES = {
     errno.ENOENT: "check the path exists",
@@ -59,10 +65,11 @@ def describe(exc: BaseException) -> str:
 
 def _missing_module(exc: ModuleNotFoundError) -> str:
     name = (exc.name or "").split(".")[0]
-    extra = "host" if name in HOST_ONLY_MODULES else "edge" if name in EDGE_MODULES else None
+    extra = EXTRA_OF_MODULE.get(name)
     if extra is None:
         return f"{name or exc} is not installed; reinstall pmactl: pip install 'pmactl[edge,host]'"
-    return f"needs the {extra} extra ({name} is not installed); install it with: pip install 'pmactl[{extra}]'"
+    hint = " (for the CPU build of torch see the README's install section)" if extra == "train" else ""
+    return f"needs the {extra} extra ({name} is not installed); install it with: pip install 'pmactl[{extra}]'{hint}"
 
 
 def _os_error(exc: OSError) -> str:

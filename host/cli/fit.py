@@ -3,22 +3,71 @@
 from __future__ import annotations
 
 import argparse
-import json
+import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from edge.errors import DataError
-from host.cli.outputs import check_output
-from host.data import load_measurement
-from host.progress import Steps, wanted
-from host.workflow import Estimator, TestResult, make_estimator, save_bundle, score_on
-from models_export.bundle import check_save_target
+from host.cli.lazy import lazy
+from host.cli.options import add_data_options, add_fit_options, expand_runs, read_measurement, read_options
+from host.cli.outputs import FIGURE_SUFFIXES, check_output, strict_json
+
+if TYPE_CHECKING:
+    from host.data import Measurement
+    from host.workflow import Estimator, TestResult
 
 
-def parse_units(text: str) -> tuple[str, str]:
-    parts = [p.strip() for p in text.split(",")]
-    if len(parts) != 2 or not all(parts):
-        raise DataError(f"--units {text!r} must be two names separated by a comma, e.g. --units bar,mm")
-    return parts[0], parts[1]
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
+    """Add ``pmactl fit``."""
+    fit = sub.add_parser("fit", help="identify a hysteresis model from a measured-data CSV")
+    add_fit_options(fit)
+    fit.add_argument(
+        "--parameterisation",
+        choices=["free", "exponential"],
+        default="free",
+        help="pi and mpi: free play weights or seed 000's beta/delta/mu form",
+    )
+    fit.add_argument(
+        "--preisach-method",
+        choices=["lsq", "forc"],
+        default="lsq",
+        help="preisach only: least squares on any data, or first-order reversal curves",
+    )
+    fit.add_argument(
+        "--calibration",
+        type=float,
+        default=0.1,
+        metavar="FRACTION",
+        help="share of each test record (after it starts moving) used to estimate its "
+        "initial state and offset; never scored (default 0.1)",
+    )
+    add_data_options(fit)
+    fit.add_argument(
+        "--plot", metavar="OUT.png", help="write measured vs model loops of each --test here (.png, .pdf or .svg)"
+    )
+    fit.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    fit.add_argument(
+        "--save", metavar="DIR", help="write the lookup-table bundle (model + inverse) here; its parent must exist"
+    )
+    fit.set_defaults(run=lazy("host.cli.fit"))
+
+
+class UnitsUnknownWarning(UserWarning):
+    """A bundle written without units for its input and output."""
+
+
+def bundle_units(train: Measurement) -> tuple[str, str]:
+    """(u, y) units for the bundle: from --units or the header; a warning names the fix when unknown."""
+    missing = [role for role in ("u", "y") if not train.unit(role)]
+    if missing:
+        warnings.warn(
+            f"--save without units: the {' and '.join(missing)} unit(s) of {Path(train.source).name} are unknown "
+            "(no --units, no suffix such as pressure_bar in the header), so the bundle says 'u'/'y' and the edge "
+            "will refuse it against a rig config in bar and mm; pass --units bar,mm",
+            UnitsUnknownWarning,
+            stacklevel=2,
+        )
+    return train.unit("u", "u"), train.unit("y", "y")
 
 
 def fit_record(args: argparse.Namespace, samples: int, estimator: Estimator, results: list[TestResult]) -> dict:
@@ -41,38 +90,55 @@ def fit_record(args: argparse.Namespace, samples: int, estimator: Estimator, res
 
 
 def run(args: argparse.Namespace) -> int:
-    units = parse_units(args.units)
+    from host.progress import Steps, wanted
+    from host.workflow import make_estimator, save_bundle, score_on, warn_extrapolation
+    from models_export.bundle import check_save_target
+
+    read_options(args)  # a malformed --columns or --units is refused before any file is read
     if not 0 < args.calibration < 0.9:
         raise DataError(f"--calibration {args.calibration} must be between 0 and 0.9")
     if args.save:
         check_output(args.save, "--save", kind="dir")
         check_save_target(args.save)  # a foreign directory is refused before the fit, not after
+    if args.plot:
+        if not args.test:
+            raise DataError("--plot draws the --test recordings' loops; pass at least one --test CSV")
+        check_output(args.plot, "--plot", suffixes=FIGURE_SUFFIXES)
     estimator = make_estimator(
         args.model,
         operators=args.operators,
         parameterisation=args.parameterisation,
         preisach_method=args.preisach_method,
     )
+    args.test = expand_runs(args.test, "--test")
     with Steps(3 + len(args.test) + bool(args.save), wanted(args.json), f"pmactl fit {args.model}") as steps:
         steps.start(f"reading {Path(args.train).name}")
-        train = load_measurement(args.train)
+        train = read_measurement(args.train, args)
         tests = []
         for path in args.test:
             steps.start(f"reading {Path(path).name}")
-            tests.append(load_measurement(path))
+            tests.append(read_measurement(path, args))
+        extrapolating = warn_extrapolation(train.u, tests, train.unit("u"))
         steps.start(f"fitting on {len(train)} samples")
         estimator.fit(train.u, train.y)
         steps.start("scoring")
         results = score_on(estimator.model_, tests, args.calibration)
         if args.save:
             steps.start("writing the bundle")
+            units = bundle_units(train)
             save_bundle(estimator, train, args.save, units, fit_record(args, len(train), estimator, results))
+    if args.plot:
+        from host.demo_figures import plot_test_loops
+
+        plot_test_loops(Path(args.plot), args.model, tests, results, train.unit("u", "u"), train.unit("y", "y"))
     if args.json:
         print(
-            json.dumps(
+            strict_json(
                 {
                     "model": args.model,
                     "fit_seconds": estimator.fit_seconds_,
+                    "units": {"u": train.unit("u"), "y": train.unit("y")},
+                    "warnings": extrapolating,
                     "tests": [
                         {
                             "file": r.name,
@@ -93,14 +159,16 @@ def run(args: argparse.Namespace) -> int:
     for note in train.notes:
         print(f"  note: {note}")
     if results:
+        y_unit = f" [{train.unit('y')}]" if train.unit("y") else ""
         print(
-            f"{'test file':<28} {'scored':>7} {'start state':>11} {'offset':>9} {'RMSE':>9} {'% p-p':>7} {'max err':>9}"
+            f"{'test file':<28} {'scored':>7} {'start state':>11} {'offset' + y_unit:>12} {'RMSE' + y_unit:>12} "
+            f"{'% p-p':>7} {'max err' + y_unit:>14}"
         )
         for r in results:
             p, s = r.prediction, r.prediction.score
             print(
-                f"{r.name:<28} {s.samples:>7} {p.branch:>11} {p.offset:>9.4g} "
-                f"{s.rmse:>9.4g} {s.rmse_pct_pp:>7.2f} {s.max_error:>9.4g}"
+                f"{r.name:<28} {s.samples:>7} {p.branch:>11} {p.offset:>12.4g} "
+                f"{s.rmse:>12.4g} {s.rmse_pct_pp:>7.2f} {s.max_error:>14.4g}"
             )
         print(
             f"(start state and offset estimated on the first {args.calibration:.0%} of each test after the input "
@@ -108,6 +176,8 @@ def run(args: argparse.Namespace) -> int:
         )
     else:
         print("no --test given: pass held-out recordings with --test to score the model")
+    if args.plot:
+        print(f"measured vs model loops written to {args.plot}")
     if args.save:
         print(f"bundle written to {args.save}")
     return 0

@@ -11,14 +11,9 @@ Subcommand modules are imported only when run (``pmactl --help`` needs no scipy)
 from __future__ import annotations
 
 import argparse
-import importlib
 
-
-def _lazy(function: str):  # noqa: ANN202
-    def run(args: argparse.Namespace) -> int:
-        return int(getattr(importlib.import_module("host.cli.identify_run"), function)(args))
-
-    return run
+from host.cli.lazy import lazy
+from host.cli.options import add_data_options
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -52,8 +47,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="do not fit a frequency-independent hysteresis loss angle beside K, T, L",
     )
+    add_data_options(fotd)
     fotd.add_argument("--json", action="store_true", help="print one JSON object")
-    fotd.set_defaults(run=_lazy("run_fotd"))
+    fotd.set_defaults(run=lazy("host.cli.identify_run", "run_fotd"))
 
     force = isub.add_parser(
         "force",
@@ -72,8 +68,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--rest-length-mm", type=float, metavar="MM", help="rest length l0 [mm] (contraction ratio = y / l0)"
     )
     force.add_argument("--radius-mm", type=float, metavar="MM", help="tondu-lopez: inner radius r0 [mm] (area pi r0^2)")
+    force.add_argument(
+        "--columns",
+        metavar="ROLE=NAME,...",
+        help="the file's own names for p (or u), y and force (or load), e.g. p=pressure_bar,y=contraction_mm,"
+        "force=force_N (default: columns named so)",
+    )
     force.add_argument("--json", action="store_true", help="print one JSON object")
-    force.set_defaults(run=_lazy("run_force"))
+    force.set_defaults(run=lazy("host.cli.identify_run", "run_force"))
 
     slip = isub.add_parser(
         "maxwell-slip",
@@ -87,4 +89,4 @@ def register(sub: argparse._SubParsersAction) -> None:
     slip.add_argument("--force-column", default="force", metavar="NAME", help="force column [N] (default force)")
     slip.add_argument("--plot", metavar="OUT.png", help="write measured vs fitted loops here")
     slip.add_argument("--json", action="store_true", help="print one JSON object")
-    slip.set_defaults(run=_lazy("run_maxwell_slip"))
+    slip.set_defaults(run=lazy("host.cli.identify_run", "run_maxwell_slip"))

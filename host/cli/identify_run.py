@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import csv
-import json
 import math
 from pathlib import Path
 
@@ -12,51 +10,62 @@ import numpy as np
 from numpy.typing import NDArray
 
 from edge.errors import DataError
-from host.data import Measurement, load_measurement
+from host.cli.options import expand_runs, read_measurement
+from host.cli.outputs import strict_json
+from host.data import Measurement
 
 
-def read_columns(path: str | Path, wanted: list[str]) -> dict[str, NDArray[np.float64]]:
-    """The named columns of a CSV as float arrays; one clear error for a missing column or bad row."""
+def read_columns(
+    path: str | Path, wanted: list[str], mapping: dict[str, str] | None = None, fix: str = "--columns ROLE=NAME"
+) -> dict[str, NDArray[np.float64]]:
+    """The named columns of a CSV as float arrays (delimiter and decimal comma sniffed, names mapped
+    by ``mapping`` as ``--columns`` gives them); one clear error for a missing column or bad row."""
+    from host.data_format import sniff_layout
+
     path = Path(path)
-    try:
-        with path.open(newline="") as handle:
-            header = [h.strip() for h in next(csv.reader(handle), [])]
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DataError(f"{path}: cannot read file ({exc}); check the path and that it is a text CSV") from exc
-    missing = [c for c in wanted if c not in header]
+    layout = sniff_layout(path)
+    mapping = mapping or {}
+    names = {role: mapping.get(role, role) for role in wanted}
+    missing = [f"{role}" + (f" (as {name!r})" if name != role else "") for role, name in names.items()
+               if name not in layout.header]  # fmt: skip
     if missing:
-        raise DataError(
-            f"{path}: column(s) {', '.join(missing)} missing; found {header}. Rename or pass the column option"
-        )
-    table = np.atleast_2d(np.genfromtxt(path, delimiter=",", skip_header=1, dtype=float))
-    if table.size == 0 or table.shape[1] != len(header):
-        raise DataError(f"{path}: no data rows with {len(header)} fields; check the delimiter is ','")
-    columns = {c: table[:, header.index(c)] for c in wanted}
+        raise DataError(f"{path}: column(s) {', '.join(missing)} missing; found {layout.header}. Pass {fix}")
+    with path.open(encoding="utf-8-sig") as handle:
+        lines = [line.replace(",", ".") if layout.decimal_comma else line for line in handle]
+    table = np.atleast_2d(np.genfromtxt(lines, delimiter=layout.delimiter, skip_header=1, dtype=float))
+    if table.size == 0 or table.shape[1] != len(layout.header):
+        raise DataError(f"{path}: no data rows with {len(layout.header)} fields; check the file is complete")
+    columns = {role: table[:, layout.header.index(name)] for role, name in names.items()}
     bad = np.flatnonzero(~np.all(np.isfinite(np.column_stack(list(columns.values()))), axis=1))
     if bad.size:
         raise DataError(f"{path}: {bad.size} row(s) with NaN or non-numbers (file line {int(bad[0]) + 2}); remove them")
     return columns
 
 
-def _fotd_record(path: str, output_column: str) -> Measurement:
-    m = load_measurement(path)
+def _fotd_record(path: str, args: argparse.Namespace) -> Measurement:
+    m = read_measurement(path, args)
+    output_column = args.output_column
     if output_column == "y":
         return m
     if output_column not in m.extras:
         raise DataError(f"{path}: --output-column {output_column!r} not in the file; found {['y', *m.extras]}")
-    return Measurement(m.t, m.u, m.extras[output_column], source=m.source, notes=m.notes)
+    units = {k: v for k, v in m.units.items() if k != "y"}
+    if m.unit(output_column):
+        units["y"] = m.unit(output_column)
+    return Measurement(m.t, m.u, m.extras[output_column], source=m.source, notes=m.notes, units=units)
 
 
 def run_fotd(args: argparse.Namespace) -> int:
     from host.identify.fotd import identify_fotd
 
-    records = [_fotd_record(p, args.output_column) for p in args.runs]
+    records = [_fotd_record(p, args) for p in expand_runs(args.runs, "RUN.csv")]
     fit = identify_fotd(records, args.method, hysteresis_phase=not args.no_hysteresis_phase)
+    u_unit, y_unit = records[0].unit("u", "unit u"), records[0].unit("y", "unit y")
     if args.json:
-        print(json.dumps(fit.as_dict()))
+        print(strict_json({**fit.as_dict(), "units": {"u": records[0].unit("u"), "y": records[0].unit("y")}}))
         return 0
     print(f"K e^(-sL)/(1+sT) by {fit.method} fit on {len(records)} record(s):")
-    print(f"  gain K          {fit.gain:10.4g} +- {fit.gain_se:.2g}  (y per unit u)")
+    print(f"  gain K          {fit.gain:10.4g} +- {fit.gain_se:.2g}  ({y_unit} per {u_unit})")
     print(f"  time constant T {fit.time_constant_s:10.4g} +- {fit.time_constant_se_s:.2g} s")
     print(f"  dead time L     {fit.dead_time_s:10.4g} +- {fit.dead_time_se_s:.2g} s")
     if fit.hysteresis_loss_angle_rad is not None:
@@ -78,6 +87,8 @@ def run_fotd(args: argparse.Namespace) -> int:
                 f"{math.degrees(h.phase_rad):7.1f}+-{math.degrees(h.phase_se_rad):<4.1f}"
                 f" {math.degrees(h.loss_angle_rad):10.1f} {abs(g):9.4g} {math.degrees(np.angle(g)):9.1f}"
             )
+    if fit.harmonics:
+        print(f"  (mean y and Y in {y_unit}, U in {u_unit}, |G| in {y_unit} per {u_unit})")
     for note in fit.notes:
         print(f"  note: {note}")
     return 0

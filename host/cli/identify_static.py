@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
@@ -11,13 +10,9 @@ import numpy as np
 
 from edge.errors import DataError
 from host.cli.identify_run import read_columns
+from host.cli.outputs import strict_json
 
 GRAVITY = 9.81
-
-
-def _header(path: str) -> list[str]:
-    with Path(path).open() as handle:
-        return [h.strip() for h in handle.readline().split(",")]
 
 
 def _positive_mm(value: float | None, option: str, what: str) -> None:
@@ -33,13 +28,14 @@ def run_force(args: argparse.Namespace) -> int:
         raise DataError("pass --rest-length-mm (the muscle's rest length; contraction ratio = y / rest length)")
     _positive_mm(args.rest_length_mm, "--rest-length-mm", "the muscle's rest length")
     _positive_mm(args.radius_mm, "--radius-mm", "the muscle's inner radius")
-    try:
-        header = _header(args.data)
-    except OSError as exc:
-        raise DataError(f"{args.data}: cannot read file ({exc}); check the path") from exc
+    from host.data_format import parse_columns, sniff_layout
+
+    mapping = parse_columns(args.columns) if args.columns else {}
+    header = set(sniff_layout(Path(args.data)).header) | set(mapping)
     pressure_column = "p" if "p" in header else "u"
     force_column = "force" if "force" in header else "load"
-    columns = read_columns(args.data, [pressure_column, "y", force_column])
+    fix = "--columns p=NAME,y=NAME,force=NAME (force in N; or load=NAME in kg)"
+    columns = read_columns(args.data, [pressure_column, "y", force_column], mapping, fix)
     force = columns[force_column] * (GRAVITY if force_column == "load" else 1.0)
     eps = columns["y"] / args.rest_length_mm
     kwargs = {"radius_m": args.radius_mm / 1e3} if args.model == "tondu-lopez" and args.radius_mm else {}
@@ -56,7 +52,7 @@ def run_force(args: argparse.Namespace) -> int:
         }
     )
     if args.json:
-        print(json.dumps(result))
+        print(strict_json(result))
         return 0
     print(
         f"{args.model} static force on {Path(args.data).name} ({force.size} samples, pressure from "
@@ -84,7 +80,8 @@ def identifiable_elements(samples: int) -> int:
 def run_maxwell_slip(args: argparse.Namespace) -> int:
     from host.identify.maxwell_slip import despike, select_and_fit
 
-    columns = read_columns(args.data, [args.position_column, args.force_column])
+    fix = "--position-column NAME --force-column NAME"
+    columns = read_columns(args.data, [args.position_column, args.force_column], fix=fix)
     samples = columns[args.position_column].size
     limit = identifiable_elements(samples)
     if args.elements is not None and args.elements > limit:
@@ -105,7 +102,7 @@ def run_maxwell_slip(args: argparse.Namespace) -> int:
             args.plot,
         )
     if args.json:
-        print(json.dumps(result.as_dict()))
+        print(strict_json(result.as_dict()))
         return 0
     print(
         f"Maxwell-slip on {Path(args.data).name}: {result.model.elements} element(s), "
@@ -116,7 +113,10 @@ def run_maxwell_slip(args: argparse.Namespace) -> int:
         print(f"  {'elements':>8} {'held-out RMSE':>14} {'% of range':>10}")
         for row in result.scan:
             print(f"  {row['elements']:>8} {row['test_rmse']:>14.4g} {row['test_rmse_pct']:>10.2f}")
-    print(f"  {'stiffness [N/unit]':>20} {'break force [N]':>16}")
+    from host.data_format import header_unit
+
+    position_unit = header_unit(args.position_column) or "unit of x"
+    print(f"  {f'stiffness [N/{position_unit}]':>20} {'break force [N]':>16}")
     for k, f in zip(result.model.stiffness_, result.model.break_force_):
         print(f"  {k:>20.5g} {f:>16.5g}")
     print(f"  offset {result.model.offset_:.5g} N; {result.note}")

@@ -1,4 +1,7 @@
-"""Argument definitions shared by the ``fit`` and ``hil`` subcommands, with their ranges stated.
+"""Argument definitions shared by the subcommands, with their ranges stated.
+
+:func:`add_data_options` and :func:`read_measurement` are the one way a command reads a
+measurement file as the lab wrote it (``--columns``, ``--time-unit``, ``--units``).
 
 Only the standard library here: ``pmactl --help`` must work on an ``edge``-only install.
 """
@@ -8,8 +11,13 @@ from __future__ import annotations
 import argparse
 import math
 from importlib import metadata
+from typing import TYPE_CHECKING
 
 from host.operator_ranges import MODELS, OPERATORS, OPERATORS_HELP
+
+if TYPE_CHECKING:
+    from host.data import Measurement
+    from host.data_format import ReadOptions
 
 
 def version() -> str:
@@ -67,3 +75,69 @@ def add_hil_options(parser: argparse.ArgumentParser, effects: object) -> None:
         help="hidden effect of the emulated rig, parameters drawn from physical ranges (default none)",
     )
     parser.add_argument("--seed", type=int, default=0, help="random seed of the effect's parameters (default 0)")
+
+
+TIME_UNIT_CHOICES = ("s", "ms", "us")  # host.data_format.TIME_UNITS (kept here: stdlib only)
+
+
+def add_data_options(parser: argparse.ArgumentParser, *, units: bool = True) -> None:
+    """``--columns``, ``--time-unit`` and (``units``) ``--units``: a measurement file as the lab wrote it.
+
+    Read the files with :func:`read_measurement`. The delimiter (``,`` ``;`` tab) and a decimal
+    comma are found in the file itself.
+    """
+    group = parser.add_argument_group("measurement files")
+    group.add_argument(
+        "--columns",
+        metavar="ROLE=NAME,...",
+        help="the file's own column names, e.g. t=time_s,u=pressure_bar,y=length_mm[,load=...,temperature=...] "
+        "(default: columns named t, u, y)",
+    )
+    group.add_argument(
+        "--time-unit",
+        choices=TIME_UNIT_CHOICES,
+        help="unit of the time column (default: a suffix in its header such as time_ms, else seconds)",
+    )
+    if units:
+        group.add_argument(
+            "--units",
+            metavar="U,Y",
+            help="units of input and output, e.g. bar,mm (or u=bar,y=mm,load=N); default: the header's "
+            "suffixes such as pressure_bar; printed in tables and written into bundles",
+        )
+
+
+def read_options(args: argparse.Namespace) -> ReadOptions:
+    """The :class:`host.data_format.ReadOptions` the data options of ``args`` give."""
+    from host.data_format import ReadOptions, parse_columns, parse_units
+
+    columns = parse_columns(args.columns) if getattr(args, "columns", None) else {}
+    units_text = getattr(args, "units", None)
+    return ReadOptions(columns, getattr(args, "time_unit", None), parse_units(units_text) if units_text else {})
+
+
+def read_measurement(path: str, args: argparse.Namespace) -> Measurement:
+    """Load ``path`` (a :class:`host.data.Measurement`) with the data options of ``args``."""
+    from host.data import load_measurement
+
+    return load_measurement(path, options=read_options(args))
+
+
+def expand_runs(paths: list[str], option: str) -> list[str]:
+    """``paths`` with glob patterns (``runs/*.csv``) expanded, sorted, for commands that take several
+    runs; a pattern that matches nothing is refused with the option named (the shell would pass it
+    on as a file name, and Windows shells do not expand it at all)."""
+    import glob
+
+    from edge.errors import DataError
+
+    expanded: list[str] = []
+    for path in paths:
+        if glob.has_magic(path):
+            matches = sorted(glob.glob(path))
+            if not matches:
+                raise DataError(f"{option} {path}: no file matches the pattern; check the folder and the name")
+            expanded += matches
+        else:
+            expanded.append(path)
+    return expanded

@@ -8,6 +8,8 @@ named with the fix.
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import tempfile
 from collections.abc import Iterable
@@ -57,3 +59,21 @@ def check_output(
     os.close(handle)
     os.unlink(probe)
     return target
+
+
+def _finite_or_none(value: object) -> object:
+    if isinstance(value, float):  # numpy's float64 is a float too
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _finite_or_none(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite_or_none(v) for v in value]
+    if hasattr(value, "tolist") and hasattr(value, "dtype"):  # a numpy scalar or array
+        return _finite_or_none(value.tolist())
+    return value
+
+
+def strict_json(value: object, **options: object) -> str:
+    """``json.dumps`` that writes standard JSON: NaN and +-inf become null (``json`` writes them as
+    ``NaN``/``-Infinity``, which other JSON readers refuse), numpy numbers become numbers."""
+    return json.dumps(_finite_or_none(value), allow_nan=False, **options)  # type: ignore[arg-type]

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import argparse
-import json
+
+from host.cli.lazy import lazy
+from host.cli.options import add_data_options, expand_runs, read_measurement
+from host.cli.outputs import strict_json
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
     """Add ``pmactl quantise`` to the command line."""
-    from host.cli import _lazy
-
     quantise = sub.add_parser(
         "quantise", help="measure int8 variants of a bundle's correction; keep one only if as accurate and faster"
     )
@@ -22,22 +23,23 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
         help="recording (t,u,y) for calibration and scoring",
     )
     quantise.add_argument("--json", action="store_true", help="print one JSON object")
-    quantise.set_defaults(run=_lazy("host.cli.quantise"))
+    add_data_options(quantise, units=False)
+    quantise.set_defaults(run=lazy("host.cli.quantise"))
 
 
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from host.data import load_measurement
     from host.train.correction import correction_features
     from models_export.quantise import quantise_bundle
 
-    pairs = [correction_features(args.bundle, load_measurement(path)) for path in args.calibration]
+    paths = expand_runs(args.calibration, "--calibration")
+    pairs = [correction_features(args.bundle, read_measurement(path, args)) for path in paths]
     features = np.concatenate([p[0] for p in pairs])
     target = np.concatenate([p[1] for p in pairs])
     report = quantise_bundle(args.bundle, features, target)
     if args.json:
-        print(json.dumps(report))
+        print(strict_json(report))
         return 0
     print(f"{'variant':<26} {'RMSE [bar]':>11} {'vs f32':>8} {'us/step':>8} {'cpu us/step':>11}")
     variants: dict[str, dict[str, float]] = report["variants"]  # type: ignore[assignment]

@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import shlex
 import signal
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+from host.cli.outputs import strict_json
+
+if TYPE_CHECKING:
+    from host.sweep.matrix import Matrix
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -78,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
         "tables": [str(p) for p in result.tables],
     }
     if args.json:
-        print(json.dumps(summary))
+        print(strict_json(summary))
     else:
         print(
             f"{summary['cells']} cells: {counts['pass']} pass, {counts['fail']} fail, {counts['error']} error"
@@ -96,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
     return 0 if counts["pass"] == len(matrix.cells) else 1
 
 
-def _list(matrix) -> int:  # noqa: ANN001
+def _list(matrix: Matrix) -> int:
     print(f"{matrix.name}: {len(matrix.cells)} cells of kind {matrix.kind.name}; axes {', '.join(matrix.axes)}")
     for cell in matrix.cells:
         labels = ", ".join(f"{k}={v}" for k, v in cell.labels.items() if k != "seed")

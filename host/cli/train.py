@@ -3,22 +3,22 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
 from edge.errors import DataError
-from host.cli.outputs import OutputPathError, check_output
-from host.data import load_measurement
+from host.cli.lazy import lazy
+from host.cli.options import add_data_options, expand_runs, read_measurement, read_options
+from host.cli.outputs import OutputPathError, check_output, strict_json
 
 DEFAULT_EPOCHS = {"hammerstein": 60, "lstm-narmax": 150, "correction": 300}
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
     """Add ``pmactl train`` to the command line."""
-    from host.cli import _lazy
-
-    train = sub.add_parser("train", help="train a neural hysteresis model (torch) or the edge's correction")
+    train = sub.add_parser(
+        "train", help="train a neural hysteresis model (torch: the train extra) or the edge's correction (no torch)"
+    )
     train.add_argument(
         "--model",
         required=True,
@@ -44,10 +44,13 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
     train.add_argument("--bundle", metavar="DIR", help="correction only: the bundle whose feedforward it corrects")
     train.add_argument("--json", action="store_true", help="print one JSON object (no progress bar)")
     train.add_argument("--save", metavar="DIR", help="write step.onnx, model.json, operator.npz, training_curve.png")
-    train.set_defaults(run=_lazy("host.cli.train"))
+    add_data_options(train)
+    train.set_defaults(run=lazy("host.cli.train"))
 
 
 def run(args: argparse.Namespace) -> int:
+    read_options(args)  # a malformed --columns or --units is refused before any file is read
+    args.train, args.test = expand_runs(args.train, "--train"), expand_runs(args.test, "--test")
     if args.epochs is not None and args.epochs < 1:
         raise DataError(f"--epochs {args.epochs} must be at least 1")
     if args.epochs is None:
@@ -60,10 +63,15 @@ def run(args: argparse.Namespace) -> int:
         raise DataError("--bundle applies to --model correction only; use --save DIR for a trained model")
     if not 0 < args.calibration < 0.9:
         raise DataError(f"--calibration {args.calibration} must be between 0 and 0.9")
-    from host.train import save_model, score_model, train_model
+    import numpy as np
 
-    records = [load_measurement(path) for path in args.train]
-    tests = [load_measurement(path) for path in args.test]
+    from host.train import save_model, score_model, train_model
+    from host.workflow import warn_extrapolation
+
+    records = [read_measurement(path, args) for path in args.train]
+    tests = [read_measurement(path, args) for path in args.test]
+    y_unit = records[0].unit("y")
+    warn_extrapolation(np.concatenate([r.u for r in records]), tests, records[0].unit("u"))
     trained = train_model(args.model, records, seed=args.seed, epochs=args.epochs, quiet=args.json)
     results = score_model(trained.model, tests, args.calibration)
     tests_json = [
@@ -88,7 +96,8 @@ def run(args: argparse.Namespace) -> int:
         }
         save_model(trained, args.save, record)
     if args.json:
-        print(json.dumps({"model": args.model, "fit_seconds": trained.fit_seconds, "tests": tests_json}))
+        # the documented keys only (tests/test_train.py); warnings went to stderr
+        print(strict_json({"model": args.model, "fit_seconds": trained.fit_seconds, "tests": tests_json}))
         return 0
     print(
         f"{args.model}: trained on {', '.join(Path(p).name for p in args.train)} ({trained.samples} samples; memory "
@@ -96,11 +105,15 @@ def run(args: argparse.Namespace) -> int:
         f"in {trained.fit_seconds:.1f} s, seed {args.seed}"
     )
     if results:
-        print(f"{'test file':<28} {'scored':>7} {'RMSE':>9} {'% p-p':>7} {'max err':>9} {'MAE':>9} {'ms/run':>8}")
+        unit = f" [{y_unit}]" if y_unit else ""
+        print(
+            f"{'test file':<28} {'scored':>7} {'RMSE' + unit:>12} {'% p-p':>7} {'max err' + unit:>14} "
+            f"{'MAE' + unit:>12} {'ms/run':>8}"
+        )
         for r, j in zip(results, tests_json):
             print(
-                f"{r.name:<28} {r.prediction.score.samples:>7} {j['rmse']:>9.4g} {j['rmse_pct_pp']:>7.2f} "
-                f"{j['max_error']:>9.4g} {j['mae']:>9.4g} {j['ms_per_run']:>8.1f}"
+                f"{r.name:<28} {r.prediction.score.samples:>7} {j['rmse']:>12.4g} {j['rmse_pct_pp']:>7.2f} "
+                f"{j['max_error']:>14.4g} {j['mae']:>12.4g} {j['ms_per_run']:>8.1f}"
             )
     else:
         print("no --test given: pass held-out recordings with --test to score the model")
@@ -125,13 +138,13 @@ def _run_correction(args: argparse.Namespace) -> int:
 
     if not args.bundle:
         raise DataError("--model correction needs --bundle DIR: the bundle whose feedforward it corrects")
-    records = [load_measurement(path) for path in args.train]
+    records = [read_measurement(path, args) for path in args.train]
     result = train_correction_into(args.bundle, records, seed=args.seed, epochs=args.epochs, quiet=args.json)
     if args.save:
         Path(args.save).mkdir(exist_ok=True)
         result.curve.save_png(Path(args.save) / "training_curve.png", "correction training")
     if args.json:
-        print(json.dumps(result.as_dict()))
+        print(strict_json(result.as_dict()))
         return 0
     print(
         f"correction trained on {', '.join(Path(p).name for p in args.train)} in {result.fit_seconds:.1f} s: "

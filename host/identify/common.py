@@ -72,7 +72,7 @@ def bounded_lsq(
     scale[scale == 0] = 1.0
     upper = np.full(design.shape[1], np.inf) if upper is None else upper
     result = lsq_linear(design / scale, target, bounds=(lower * scale, upper * scale), method="bvls")
-    return result.x / scale
+    return np.asarray(result.x / scale, dtype=np.float64)
 
 
 MIN_SLOPE_DOC = (

@@ -72,7 +72,7 @@ def _check_fit_data(p: Array, eps: Array, minimum: int, force: Array) -> None:
 def _standard_errors(jacobian: Array, residual: Array) -> Array:
     dof = max(residual.size - jacobian.shape[1], 1)
     covariance = np.linalg.pinv(jacobian.T @ jacobian) * float(residual @ residual) / dof
-    return np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+    return np.asarray(np.sqrt(np.clip(np.diag(covariance), 0.0, None)), dtype=np.float64)
 
 
 class TonduLopezForce:

@@ -35,6 +35,7 @@ from scipy.signal import lfilter
 from edge.errors import DataError
 from host.data import Measurement
 from host.identify.harmonics import Harmonic, harmonics_of
+from host.identify.threads import blas_threads
 
 Method = Literal["auto", "harmonic", "time"]
 RELATIVE_ERROR_FLOOR = 0.02
@@ -74,7 +75,9 @@ class FOTDFit:
         """The model's ``G(j 2 pi f)``, the hysteresis loss angle included when fitted."""
         omega = 2 * np.pi * np.asarray(frequency_hz, float)
         rotation = np.exp(-1j * (self.hysteresis_loss_angle_rad or 0.0))
-        return fotd_response(omega, self.gain, self.time_constant_s, self.dead_time_s) * rotation
+        return np.asarray(
+            fotd_response(omega, self.gain, self.time_constant_s, self.dead_time_s) * rotation, np.complex128
+        )
 
     def as_dict(self) -> dict[str, object]:
         """The JSON form printed by ``pmactl identify fotd --json``."""
@@ -115,12 +118,25 @@ def fotd_response(
     omega: NDArray[np.float64], gain: float, time_constant_s: float, dead_time_s: float
 ) -> NDArray[np.complex128]:
     """``K e^{-j w L} / (1 + j w T)`` at angular frequencies ``omega`` [rad/s]."""
-    return gain * np.exp(-1j * omega * dead_time_s) / (1.0 + 1j * omega * time_constant_s)
+    return np.asarray(gain * np.exp(-1j * omega * dead_time_s) / (1.0 + 1j * omega * time_constant_s), np.complex128)
 
 
 def _standard_errors(jacobian: NDArray[np.float64], scale: float) -> NDArray[np.float64]:
     covariance = np.linalg.pinv(jacobian.T @ jacobian) * scale
-    return np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+    return np.asarray(np.sqrt(np.clip(np.diag(covariance), 0.0, None)), dtype=np.float64)
+
+
+FREQUENCY_TOLERANCE = 0.02  # relative: two runs "at 0.5 Hz" are estimated a few 0.01 % apart
+
+
+def distinct_frequencies(harmonics: list[Harmonic]) -> list[float]:
+    """The different frequencies [Hz] among ``harmonics``: ones within :data:`FREQUENCY_TOLERANCE`
+    of the previous (sorted) count once, so two runs at the same frequency are one point."""
+    groups: list[float] = []
+    for frequency in sorted(h.frequency_hz for h in harmonics):
+        if not groups or frequency > groups[-1] * (1.0 + FREQUENCY_TOLERANCE):
+            groups.append(frequency)
+    return groups
 
 
 def fit_frequency_response(harmonics: list[Harmonic], hysteresis_phase: bool = True) -> FOTDFit:
@@ -131,13 +147,20 @@ def fit_frequency_response(harmonics: list[Harmonic], hysteresis_phase: bool = T
     on the frequency, since rate-independent hysteresis lags the output by the same angle at
     every rate. Without it a hysteretic plant's phase at low frequency is blamed on T and L.
     """
-    frequencies = sorted({round(h.frequency_hz, 4) for h in harmonics})
-    needed = 2
+    frequencies = distinct_frequencies(harmonics)
+    # two real equations per frequency; at least one degree of freedom left for the standard errors
+    parameters = 4 if hysteresis_phase else 3
+    needed = parameters // 2 + 1
     if len(frequencies) < needed:
+        loss = (
+            " and the hysteresis loss angle need at least 3 (or pass --no-hysteresis-phase for 2)"
+            if hysteresis_phase and len(frequencies) == 2
+            else f" need at least {needed} frequencies"
+        )
         raise DataError(
-            f"found sinusoids at {len(frequencies)} frequency "
-            f"({', '.join(f'{f:g} Hz' for f in frequencies) or 'none'}); "
-            f"K, T and L need at least {needed} frequencies: record a stepped sine "
+            f"found sinusoids at {len(frequencies)} distinct frequency/ies "
+            f"({', '.join(f'{f:g} Hz' for f in frequencies) or 'none'}; runs within "
+            f"{FREQUENCY_TOLERANCE:.0%} of each other count once); K, T and L{loss}: record a stepped sine "
             "(pmactl hil record --scenario stepped-sine), pass one run per frequency, or use --method time"
         )
     omega = np.array([2 * np.pi * h.frequency_hz for h in harmonics])
@@ -214,7 +237,7 @@ def simulate_fotd(
         a = np.exp(-dt / time_constant_s)
         drive = np.concatenate([[delayed[0]], 0.5 * (delayed[1:] + delayed[:-1])]) - u[0]
         state = lfilter([1.0 - a], [1.0, -a], drive, zi=[a * 0.0])[0] + u[0]
-    return gain * (state - u[0])
+    return np.asarray(gain * (state - u[0]), dtype=np.float64)
 
 
 def fit_time_response(records: list[Measurement]) -> FOTDFit:
@@ -270,18 +293,24 @@ def identify_fotd(records: list[Measurement], method: Method = "auto", hysteresi
     frequencies, else (``auto``) from the time response."""
     if not records:
         raise DataError("no records given; pass at least one CSV with t, u, y")
-    if method == "time":
-        return fit_time_response(records)
-    found: list[Harmonic] = []
-    for m in records:
-        found += harmonics_of(m.t, m.u, m.y, m.source)
-    distinct = {round(h.frequency_hz, 4) for h in found}
-    if method == "auto" and len(distinct) < 2:
-        fit = fit_time_response(records)
-        fit.notes.insert(
-            0,
-            f"no stepped sine found (steady sinusoids at {len(distinct)} frequency/ies, K, T, L need 2); "
-            "fell back to the step / ramp response fit",
-        )
-        return fit
-    return fit_frequency_response(found, hysteresis_phase)
+    # small least-squares problems: one BLAS thread unless they are large (host.identify.threads)
+    with blas_threads(sum(len(m) for m in records) * 64.0):
+        if method == "time":
+            return fit_time_response(records)
+        found: list[Harmonic] = []
+        for m in records:
+            found += harmonics_of(m.t, m.u, m.y, m.source)
+        distinct = distinct_frequencies(found)
+        if method == "auto" and len(distinct) < 2:
+            fit = fit_time_response(records)
+            fit.notes.insert(
+                0,
+                f"no stepped sine found (steady sinusoids at {len(distinct)} distinct frequency/ies, K, T, L need "
+                "2); fell back to the step / ramp response fit",
+            )
+            return fit
+        if method == "auto" and hysteresis_phase and len(distinct) == 2:
+            fit = fit_frequency_response(found, hysteresis_phase=False)
+            fit.notes.insert(0, "2 distinct frequencies: K, T, L fitted without the hysteresis loss angle (needs 3)")
+            return fit
+        return fit_frequency_response(found, hysteresis_phase)

@@ -119,7 +119,8 @@ class MaxwellSlip:
         """Force [N] along ``position``, elements unstretched at its first sample."""
         x = np.asarray(position, float)
         coef = np.concatenate([[self.offset_, self.linear_stiffness_], self.stiffness_])
-        return np.column_stack([np.ones_like(x), x - x[0], slip_stretches(x, self.slip_)]) @ coef
+        design = np.column_stack([np.ones_like(x), x - x[0], slip_stretches(x, self.slip_)])
+        return np.asarray(design @ coef, dtype=np.float64)
 
     def get_params(self) -> dict[str, object]:
         return {"elements": self.elements, "refine": self.refine}

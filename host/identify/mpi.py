@@ -22,7 +22,7 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import least_squares
+from scipy.optimize import OptimizeResult, least_squares
 
 from edge.errors import ModelError
 from edge.hysteresis.mpi import MPIModel
@@ -201,7 +201,7 @@ class MPIEstimator(HysteresisEstimator):
         lower, upper = lower.copy(), upper.copy()
         lower[n + 1], upper[n + 1] = 1.0 - 1e-12, 1.0 + 1e-12
 
-        def refine(theta0: NDArray[np.float64]):  # noqa: ANN202 - scipy's OptimizeResult
+        def refine(theta0: NDArray[np.float64]) -> OptimizeResult:
             return least_squares(
                 residual, theta0, jac=jacobian, bounds=(lower, upper), method="trf", tr_solver="lsmr", max_nfev=300
             )

@@ -14,6 +14,7 @@ onto the grid, then projected onto non-negative cell masses.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import Literal
 
 import numpy as np
@@ -76,7 +77,9 @@ class EverettGrid:
         return out
 
 
-def regressor_chunks(u: NDArray[np.float64], grid: EverettGrid, start: MemoryStart, capacity: int, chunk: int = 4096):
+def regressor_chunks(
+    u: NDArray[np.float64], grid: EverettGrid, start: MemoryStart, capacity: int, chunk: int = 4096
+) -> Iterator[NDArray[np.float64]]:
     """Yield blocks of regressor rows: ``y[t] = y_min + rows[t] @ E_nodes``.
 
     Walks the same turning-point stack as ``PreisachKernel.step`` (forward mode), carrying a

@@ -10,11 +10,12 @@ the valve lag and the speed-dependent friction, both functions of the reference'
 
 Why this and not the alternatives: the correction acts on the reference only (no measured
 feature), so it cannot destabilise the PID loop and needs no plant model; it is static, so
-training is one small regression (seconds) instead of back-propagation through a closed loop
-(specialised inverse learning); and it reuses the bundle's table, so it corrects the
-feedforward the edge really runs. Its limit: a recording's ``(y, dy/dt)`` must cover the
-references it will meet (record sines over the working range and rates, e.g. the HIL's
-``sines`` scenario).
+training is one small regression (seconds: full-batch L-BFGS from scipy on a hand-written
+gradient, one BLAS thread) instead of back-propagation through a closed loop (specialised
+inverse learning), and needs no torch (the graph is written with onnx's helper API); and it
+reuses the bundle's table, so it corrects the feedforward the edge really runs. Its limit: a
+recording's ``(y, dy/dt)`` must cover the references it will meet (record sines over the
+working range and rates, e.g. the HIL's ``sines`` scenario).
 
 The y signal is smoothed (Savitzky-Golay, ``SMOOTHING_S``) before differentiating: the edge's
 reference is smooth, a measured contraction carries sensor noise.
@@ -33,12 +34,76 @@ from scipy.signal import savgol_filter
 from edge.errors import DataError
 from edge.runtime.bundle import load_bundle
 from host.data import Measurement
-from host.train.common import Curve, EarlyStopping, normaliser, progress, seed_everything
+from host.train.common import Curve, EarlyStopping, normaliser, progress
 
 FEATURES = ("reference_mm", "reference_rate_mm_s", "feedforward_bar")
 HIDDEN = (16, 16)
 SMOOTHING_S = 0.15
 MIN_SAMPLES = 500
+
+
+@dataclass
+class CorrectionMLP:
+    """The trained tanh MLP: ``features`` [N, 3] -> correction [bar].
+
+    Attributes:
+        mean, inv_std: input normalisation (per feature, in the features' units).
+        scale: output scale [bar]; the last layer's output times ``scale`` is the correction.
+        layers: weights [out, in] and biases [out], alternating, first layer first.
+    """
+
+    mean: NDArray[np.float64]
+    inv_std: NDArray[np.float64]
+    scale: float
+    layers: list[NDArray[np.float64]]
+
+    def predict(self, features: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Correction [bar] for each row of ``features``, in float32 as onnxruntime computes it."""
+        h = (np.asarray(features, np.float32) - self.mean.astype(np.float32)) * self.inv_std.astype(np.float32)
+        for k in range(0, len(self.layers), 2):
+            h = h @ self.layers[k].T.astype(np.float32) + self.layers[k + 1].astype(np.float32)
+            if k < len(self.layers) - 2:
+                h = np.tanh(h)
+        return (h[:, 0] * np.float32(self.scale)).astype(np.float64)
+
+    def to_onnx(self, path: str | Path) -> Path:
+        """Write the net as an opset-18 ONNX graph, input ``features`` [1, 3], output ``correction_bar`` [1, 1]."""
+        import onnx
+        from onnx import TensorProto, helper, numpy_helper
+
+        from models_export.onnx_step import OPSET
+
+        def constant(name: str, value: NDArray[np.float64] | float) -> onnx.TensorProto:
+            return numpy_helper.from_array(np.asarray(value, np.float32), name)
+
+        initialisers = [constant("mean", self.mean[None, :]), constant("inv_std", self.inv_std[None, :])]
+        nodes = [
+            helper.make_node("Sub", ["features", "mean"], ["centred"]),
+            helper.make_node("Mul", ["centred", "inv_std"], ["h0"]),
+        ]
+        count = len(self.layers) // 2
+        for i in range(count):
+            initialisers += [constant(f"w{i}", self.layers[2 * i]), constant(f"b{i}", self.layers[2 * i + 1])]
+            out = f"a{i}" if i < count - 1 else "net_out"
+            nodes.append(helper.make_node("Gemm", [f"h{i}", f"w{i}", f"b{i}"], [out], transB=1))
+            if i < count - 1:
+                nodes.append(helper.make_node("Tanh", [out], [f"h{i + 1}"]))
+        initialisers.append(constant("scale", self.scale))
+        nodes.append(helper.make_node("Mul", ["net_out", "scale"], ["correction_bar"]))
+        graph = helper.make_graph(
+            nodes,
+            "pmactl_correction",
+            [helper.make_tensor_value_info("features", TensorProto.FLOAT, [1, len(self.mean)])],
+            [helper.make_tensor_value_info("correction_bar", TensorProto.FLOAT, [1, 1])],
+            initialisers,
+        )
+        model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)], producer_name="pmactl")
+        model.ir_version = 9  # what onnxruntime >= 1.17 reads
+        onnx.checker.check_model(model)
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        onnx.save(model, str(path))
+        return path
 
 
 @dataclass
@@ -78,6 +143,15 @@ def correction_features(bundle_dir: str | Path, record: Measurement) -> tuple[ND
     return np.column_stack([reference, rate, feedforward]), record.u - feedforward
 
 
+def _initial_weights(sizes: tuple[int, ...], rng: np.random.Generator) -> list[NDArray[np.float64]]:
+    """Uniform +-1/sqrt(fan-in) weights and biases (the usual default of a dense layer)."""
+    params = []
+    for fan_in, fan_out in zip(sizes, sizes[1:]):
+        bound = 1.0 / np.sqrt(fan_in)
+        params += [rng.uniform(-bound, bound, (fan_out, fan_in)), rng.uniform(-bound, bound, fan_out)]
+    return params
+
+
 def train_correction(
     features: NDArray[np.float64],
     target: NDArray[np.float64],
@@ -86,54 +160,76 @@ def train_correction(
     epochs: int = 300,
     quiet: bool = True,
     tail_fraction: float = 0.2,
-    patience: int = 40,
-):  # noqa: ANN201 (returns a torch module)
-    """Fit the MLP (Adam, full batch) with early stopping on the last ``tail_fraction``."""
-    import torch
-    from torch import nn
+    patience: int = 60,
+) -> tuple[CorrectionMLP, Curve, float, int]:
+    """Fit the MLP by full-batch L-BFGS with early stopping on the last ``tail_fraction``.
 
-    seed_everything(seed)
+    ``epochs`` is the number of L-BFGS iterations (each one pass over the data with its
+    gradient, written out by hand below). Returns (the net with the best held-out tail,
+    the curve, that tail's RMSE [bar], the number of training samples).
+    """
+    from scipy.optimize import minimize
+    from threadpoolctl import threadpool_limits
+
     n_train = int((1 - tail_fraction) * target.size)
     stats = [normaliser(features[:n_train, j]) for j in range(features.shape[1])]
-    mean = np.array([s[0] for s in stats], np.float32)
-    std = np.array([s[1] for s in stats], np.float32)
+    mean = np.array([s[0] for s in stats])
+    inv_std = 1.0 / np.array([s[1] for s in stats])
     scale = float(normaliser(target[:n_train])[1])
+    x = (features - mean) * inv_std
+    x_train, x_tail = x[:n_train], x[n_train:]
+    t_train = target[:n_train] / scale
+    sizes = (features.shape[1], *HIDDEN, 1)
+    start = _initial_weights(sizes, np.random.default_rng(seed))
+    shapes = [p.shape for p in start]
+    splits = np.cumsum([p.size for p in start])[:-1]
 
-    class Correction(nn.Module):
-        def __init__(self) -> None:
-            super().__init__()
-            sizes = (features.shape[1], *HIDDEN, 1)
-            layers: list[nn.Module] = []
-            for i, (a, b) in enumerate(zip(sizes, sizes[1:])):
-                layers.append(nn.Linear(a, b))
-                if i < len(sizes) - 2:
-                    layers.append(nn.Tanh())
-            self.net = nn.Sequential(*layers)
-            self.register_buffer("mean", torch.from_numpy(mean[None, :]))
-            self.register_buffer("inv_std", torch.from_numpy((1.0 / std)[None, :]))
-            self.register_buffer("scale", torch.tensor(scale, dtype=torch.float32))
+    def unpack(theta: NDArray[np.float64]) -> list[NDArray[np.float64]]:
+        return [part.reshape(shape) for part, shape in zip(np.split(theta, splits), shapes)]
 
-        def forward(self, x):  # noqa: ANN001, ANN202
-            return self.net((x - self.mean) * self.inv_std) * self.scale
+    def loss_and_gradient(theta: NDArray[np.float64]) -> tuple[float, NDArray[np.float64]]:
+        params = unpack(theta)
+        activations = [x_train]
+        for k in range(0, len(params) - 2, 2):
+            activations.append(np.tanh(activations[-1] @ params[k].T + params[k + 1]))
+        residual = activations[-1] @ params[-2].T + params[-1] - t_train[:, None]
+        delta = 2.0 * residual / t_train.size
+        gradients: list[NDArray[np.float64]] = []
+        for k in range(len(params) - 2, -1, -2):
+            gradients[:0] = [delta.T @ activations[k // 2], delta.sum(axis=0)]
+            if k:
+                delta = (delta @ params[k]) * (1.0 - activations[k // 2] ** 2)
+        return float(np.mean(residual**2)), np.concatenate([g.ravel() for g in gradients])
 
-    model = Correction()
-    x = torch.as_tensor(features, dtype=torch.float32)
-    y = torch.as_tensor(target[:, None], dtype=torch.float32)
-    optimiser = torch.optim.Adam(model.parameters(), lr=1e-2)
     curve, stopper = Curve(), EarlyStopping(patience)
-    for epoch in progress(epochs, "correction", quiet):
-        loss = torch.mean(((model(x[:n_train]) - y[:n_train]) / scale) ** 2)
-        optimiser.zero_grad()
-        loss.backward()
-        optimiser.step()
-        with torch.no_grad():
-            tail = float(torch.sqrt(torch.mean((model(x[n_train:]) - y[n_train:]) ** 2)))
-        curve.add("Adam, full batch", epoch, float(loss.detach()), tail)
-        if stopper.update(tail, {"model": model.state_dict()}):
-            break
-    if stopper.best_state is not None:
-        model.load_state_dict(stopper.best_state["model"])  # type: ignore[arg-type]
-    return model.eval(), curve, stopper.best, n_train
+    bar = progress(epochs, "correction", quiet)
+
+    def after_iteration(intermediate_result: object) -> None:
+        theta = np.asarray(intermediate_result.x)  # type: ignore[attr-defined]
+        net = CorrectionMLP(mean, inv_std, scale, unpack(theta))
+        tail = float(np.sqrt(np.mean((net.predict(features[n_train:]) - target[n_train:]) ** 2)))
+        iteration = next(bar, epochs)
+        curve.add("L-BFGS, full batch", iteration, float(intermediate_result.fun), tail)  # type: ignore[attr-defined]
+        if stopper.update(tail, {"theta": theta}):
+            raise StopIteration
+
+    del x_tail  # the tail is scored through CorrectionMLP.predict, exactly as exported
+    # one BLAS thread: the matrices are [N, 16]; more threads cost 8x the CPU time here
+    with threadpool_limits(1):
+        minimize(
+            loss_and_gradient,
+            np.concatenate([p.ravel() for p in start]),
+            jac=True,
+            method="L-BFGS-B",
+            callback=after_iteration,
+            options={"maxiter": epochs, "maxfun": 2 * epochs},
+        )
+    for _ in bar:  # close the progress bar when L-BFGS converged early
+        pass
+    if stopper.best_state is None:
+        raise DataError("the correction did not train: the held-out tail error was never finite; check the recording")
+    best = unpack(np.asarray(stopper.best_state["theta"]))
+    return CorrectionMLP(mean, inv_std, scale, best), curve, stopper.best, n_train
 
 
 def train_correction_into(
@@ -142,10 +238,7 @@ def train_correction_into(
     """Train the correction on ``records`` and add it to the bundle at ``bundle_dir``."""
     import tempfile
 
-    import torch
-
     from models_export.bundle import add_correction
-    from models_export.onnx_step import export_module
 
     start = time.perf_counter()
     pairs = [correction_features(bundle_dir, r) for r in records]
@@ -154,15 +247,13 @@ def train_correction_into(
     model, curve, tail_rmse, n_train = train_correction(features, target, seed=seed, epochs=epochs, quiet=quiet)
     fit_seconds = time.perf_counter() - start
     with tempfile.TemporaryDirectory() as scratch:
-        path = export_module(
-            model, (torch.zeros(1, len(FEATURES)),), Path(scratch) / "correction.onnx", ["features"], ["correction_bar"]
-        )
+        path = model.to_onnx(Path(scratch) / "correction.onnx")
         spec: dict[str, object] = {
             "features": list(FEATURES),
             "input": "features",
             "output": "correction_bar",
             "training": {
-                "method": "direct inverse learning (host/train/correction.py)",
+                "method": "direct inverse learning, L-BFGS (host/train/correction.py)",
                 "records": [Path(r.source).name for r in records],
                 "seed": seed,
                 "tail_rmse_bar": tail_rmse,
