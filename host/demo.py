@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from edge.control.reference import parse_reference
+from edge.control.reference import beyond_reach, parse_reference
 from edge.runtime.bundle import load_bundle
 from edge.runtime.config import load_config
 from edge.runtime.run import EdgeRuntime
@@ -38,7 +38,7 @@ from host.data import Measurement, load_measurement
 from host.demo_figures import plot_loops, plot_tracking
 from host.examples import example_path
 from host.train.correction import correction_bundle
-from host.workflow import make_estimator, reference_beyond_reach, rest_state, save_bundle, score_on
+from host.workflow import make_estimator, rest_state, save_bundle, score_on
 
 MODELS = ("pi", "mpi", "dpi", "preisach")
 TRACKING = "sine:amplitude=30,frequency=0.2,offset=40"  # seed 000 Table 4: 3 sin(2 pi 0.2 t) + 4 cm
@@ -224,7 +224,7 @@ def run_demo(args: argparse.Namespace) -> int:
     )
     say("")
     reachable = load_bundle(out / "preisach").inverse.input_range
-    reach = reference_beyond_reach(parse_reference(TRACKING), TRACKING_S, reachable)
+    reach = beyond_reach(parse_reference(TRACKING), TRACKING_S, reachable)
     if reach:
         warnings.warn(f"demo tracking test: {reach}", stacklevel=1)
     say(f"Closed loop on the emulated rig ({HIL_RIG_CONFIG.name}: ADS1015 + MCP4725 over I2C, 1 kHz, lockstep),")

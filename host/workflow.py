@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -115,28 +114,6 @@ def save_bundle(
     source = Path(train.source)
     training_data = [source] if source.is_file() else []
     return write_bundle(directory, forward, inverse, units=units, fit_record=record, training_data=training_data)
-
-
-def reference_beyond_reach(
-    reference: Callable[[float], float], duration_s: float, reachable: tuple[float, float], unit: str = "mm"
-) -> str | None:
-    """A warning when ``reference`` leaves the bundle's reachable output range, else None.
-
-    The feedforward (the inverse table) clamps a set-point it cannot reach to the nearest
-    reachable one, so the excess is left to the PID and shows as tracking error at the peaks.
-    Sampled every 10 ms over ``duration_s``.
-    """
-    t = np.arange(0.0, duration_s, 0.01)
-    wanted = np.array([reference(float(ti)) for ti in t])
-    low, high = float(wanted.min()), float(wanted.max())
-    if low >= reachable[0] - 1e-9 and high <= reachable[1] + 1e-9:
-        return None
-    outside = float(np.mean((wanted < reachable[0]) | (wanted > reachable[1])))
-    return (
-        f"the reference asks {low:.1f}..{high:.1f} {unit} but the bundle reaches only "
-        f"{reachable[0]:.1f}..{reachable[1]:.1f} {unit} ({outside:.0%} of the time outside): the feedforward "
-        "clips there and the PID must do the rest; lower the amplitude or offset, or fit on data that reaches further"
-    )
 
 
 class ExtrapolationWarning(UserWarning):

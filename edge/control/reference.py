@@ -148,8 +148,8 @@ def beyond_reach(
 
     The feedforward (the inverse table) clamps a set-point it cannot reach to the nearest
     reachable one, so the excess is left to the PID and shows as tracking error at the peaks.
-    Sampled every 10 ms over ``duration_s``. (``host.workflow.reference_beyond_reach``, which
-    the demo uses, is this same check; the edge cannot import host.)
+    Sampled every 10 ms over ``duration_s``. The edge checks this before arming; the demo
+    (``host.demo``) uses the same function.
     """
     import numpy as np
 
