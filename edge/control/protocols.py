@@ -43,14 +43,14 @@ Shape = Callable[[float, dict[str, list[float]]], np.ndarray]  # (dt_s, params) 
 def _corners(points: list[float], rate: float, dt: float) -> np.ndarray:
     """Piecewise-linear through ``points`` at ``rate`` [range per s], sampled every ``dt``."""
     times = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(points)) / rate)])
-    return np.interp(np.arange(int(round(times[-1] / dt))) * dt, times, points)
+    return np.asarray(np.interp(np.arange(int(round(times[-1] / dt))) * dt, times, points), dtype=np.float64)
 
 
 def _triangles(dt: float, p: dict[str, list[float]]) -> np.ndarray:
     levels, period = int(p["levels"][0]), 1.0 / p["frequency"][0]
     t = np.arange(int(round(levels * period / dt))) * dt
     peak = (np.minimum(t // period, levels - 1) + 1.0) / levels
-    return peak * (1.0 - np.abs(2.0 * ((t % period) / period) - 1.0))
+    return np.asarray(peak * (1.0 - np.abs(2.0 * ((t % period) / period) - 1.0)), dtype=np.float64)
 
 
 def _forc(dt: float, p: dict[str, list[float]]) -> np.ndarray:
@@ -91,7 +91,7 @@ def _chirp(dt: float, p: dict[str, list[float]]) -> np.ndarray:
     t = np.arange(int(round(length / dt))) * dt
     k = math.log(f1 / f0) / length
     phase = 2 * np.pi * f0 * (np.expm1(k * t) / k if k else t)
-    return 0.5 - 0.5 * np.cos(phase)
+    return np.asarray(0.5 - 0.5 * np.cos(phase), dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -205,7 +205,7 @@ def _from_csv(path: Path, spec: str, dt: float) -> np.ndarray:
         raise DataError(f"--protocol {path}: needs at least two rows below the header")
     if times[0] != 0.0:
         raise DataError(f"--protocol {path}: t must start at 0 (it starts at {times[0]:g} s)")
-    return np.interp(np.arange(int(round(times[-1] / dt)) + 1) * dt, times, values)
+    return np.asarray(np.interp(np.arange(int(round(times[-1] / dt)) + 1) * dt, times, values), dtype=np.float64)
 
 
 def build_protocol(
