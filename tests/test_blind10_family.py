@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.plants import (
+from bench.plants import (
     blind2_effects,
     blind2_family,
     blind2_protocols,
@@ -55,8 +55,8 @@ from tests.plants import (
     fresh_protocols,
     protocols,
 )
-from tests.plants.blind10_effects import BLIND10_FORMS, LOAD_PATTERNS, TEMPERATURE_PATTERNS, render
-from tests.plants.blind10_family import (
+from bench.plants.blind10_effects import BLIND10_FORMS, LOAD_PATTERNS, TEMPERATURE_PATTERNS, render
+from bench.plants.blind10_family import (
     BLIND10_PLANTS,
     BLIND10_RATES_HZ,
     LOAD_STEP_KG,
@@ -69,8 +69,8 @@ from tests.plants.blind10_family import (
     measurement_from,
     simulate,
 )
-from tests.plants.blind10_protocols import BLIND10_PROTOCOLS, with_exhaust_shakedown
-from tests.plants.blind10_rig import (
+from bench.plants.blind10_protocols import BLIND10_PROTOCOLS, with_exhaust_shakedown
+from bench.plants.blind10_rig import (
     hart_bursts,
     held,
     muscle_pressure,
@@ -79,14 +79,14 @@ from tests.plants.blind10_rig import (
     triboelectric,
     waveguide_error,
 )
-from tests.plants.families import FAMILIES
-from tests.plants.filters import lowpass
-from tests.plants.properties import (
+from bench.plants.families import FAMILIES
+from bench.plants.filters import lowpass
+from bench.plants.properties import (
     assert_any_duration_builds,
     assert_deterministic_by_seed,
     assert_effect_size_as_recorded,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
+from bench.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 30.0
 CASES = blind10_cases(DURATION_S)

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.plants import (
+from bench.plants import (
     blind2_effects,
     blind2_family,
     blind2_protocols,
@@ -58,8 +58,8 @@ from tests.plants import (
     fresh_protocols,
     protocols,
 )
-from tests.plants.blind11_effects import BLIND11_FORMS, LOAD_PATTERNS, TEMPERATURE_PATTERNS, render
-from tests.plants.blind11_family import (
+from bench.plants.blind11_effects import BLIND11_FORMS, LOAD_PATTERNS, TEMPERATURE_PATTERNS, render
+from bench.plants.blind11_family import (
     BLIND11_PLANTS,
     BLIND11_RATES_HZ,
     NONE_PER_PLANT,
@@ -71,8 +71,8 @@ from tests.plants.blind11_family import (
     measurement_from,
     simulate,
 )
-from tests.plants.blind11_protocols import BLIND11_PROTOCOLS, with_ringdown_conditioning
-from tests.plants.blind11_rig import (
+from bench.plants.blind11_protocols import BLIND11_PROTOCOLS, with_ringdown_conditioning
+from bench.plants.blind11_rig import (
     TC_CONVERSION_S,
     TC_STEP_K,
     load_reading,
@@ -82,13 +82,13 @@ from tests.plants.blind11_rig import (
     stroke_reading,
     triangulation_error,
 )
-from tests.plants.families import FAMILIES
-from tests.plants.properties import (
+from bench.plants.families import FAMILIES
+from bench.plants.properties import (
     assert_any_duration_builds,
     assert_deterministic_by_seed,
     assert_effect_size_as_recorded,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
+from bench.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 30.0
 CASES = blind11_cases(DURATION_S)

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.plants import (
+from bench.plants import (
     blind_effects,
     blind_family,
     blind_protocols,
@@ -28,9 +28,9 @@ from tests.plants import (
     fresh_protocols,
     protocols,
 )
-from tests.plants.blind2_cores import BLIND2_CORES, draw_params
-from tests.plants.blind2_effects import BLIND2_FORMS, draw_effect_params, render
-from tests.plants.blind2_family import (
+from bench.plants.blind2_cores import BLIND2_CORES, draw_params
+from bench.plants.blind2_effects import BLIND2_FORMS, draw_effect_params, render
+from bench.plants.blind2_family import (
     BLIND2_PLANTS,
     BLIND2_RATES_HZ,
     NONE_PER_PLANT,
@@ -40,15 +40,15 @@ from tests.plants.blind2_family import (
     measurement_from,
     simulate,
 )
-from tests.plants.blind2_protocols import BLIND2_PROTOCOLS, with_range_check
-from tests.plants.properties import (
+from bench.plants.blind2_protocols import BLIND2_PROTOCOLS, with_range_check
+from bench.plants.properties import (
     assert_any_duration_builds,
     assert_closed_loop_3_to_20_percent_wide,
     assert_deterministic_by_seed,
     slow_and_fast_triangles,
     step_and_hold,
 )
-from tests.plants.visibility import EFFECT_MAX_OVER_SPAN, EFFECT_MIN_OVER_NOISE
+from bench.plants.visibility import EFFECT_MAX_OVER_SPAN, EFFECT_MIN_OVER_NOISE
 
 DURATION_S = 40.0
 CASES = blind2_cases(DURATION_S)

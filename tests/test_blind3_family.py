@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.plants import (
+from bench.plants import (
     blind2_effects,
     blind2_family,
     blind2_protocols,
@@ -33,15 +33,15 @@ from tests.plants import (
     fresh_protocols,
     protocols,
 )
-from tests.plants.blind3_cores import BLIND3_CORES, draw_params, position_sensor
-from tests.plants.blind3_effects import (
+from bench.plants.blind3_cores import BLIND3_CORES, draw_params, position_sensor
+from bench.plants.blind3_effects import (
     BLIND3_FORMS,
     LOAD_PATTERNS,
     TEMPERATURE_PATTERNS,
     draw_effect_params,
     render,
 )
-from tests.plants.blind3_family import (
+from bench.plants.blind3_family import (
     BLIND3_PLANTS,
     BLIND3_RATES_HZ,
     NONE_PER_PLANT,
@@ -52,8 +52,8 @@ from tests.plants.blind3_family import (
     measurement_from,
     simulate,
 )
-from tests.plants.blind3_protocols import BLIND3_PROTOCOLS, with_full_sweep
-from tests.plants.properties import (
+from bench.plants.blind3_protocols import BLIND3_PROTOCOLS, with_full_sweep
+from bench.plants.properties import (
     assert_any_duration_builds,
     assert_closed_loop_3_to_20_percent_wide,
     assert_deterministic_by_seed,
@@ -61,7 +61,7 @@ from tests.plants.properties import (
     slow_and_fast_triangles,
     step_and_hold,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
+from bench.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 40.0
 CASES = blind3_cases(DURATION_S)

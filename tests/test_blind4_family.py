@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.plants import (
+from bench.plants import (
     blind2_effects,
     blind2_family,
     blind2_protocols,
@@ -36,15 +36,15 @@ from tests.plants import (
     fresh_protocols,
     protocols,
 )
-from tests.plants.blind4_cores import BLIND4_CORES, draw_params, masing, stoner_crimps
-from tests.plants.blind4_effects import (
+from bench.plants.blind4_cores import BLIND4_CORES, draw_params, masing, stoner_crimps
+from bench.plants.blind4_effects import (
     BLIND4_FORMS,
     LOAD_PATTERNS,
     TEMPERATURE_PATTERNS,
     draw_effect_params,
     render,
 )
-from tests.plants.blind4_family import (
+from bench.plants.blind4_family import (
     BLIND4_PLANTS,
     BLIND4_RATES_HZ,
     NONE_PER_PLANT,
@@ -55,9 +55,9 @@ from tests.plants.blind4_family import (
     measurement_from,
     simulate,
 )
-from tests.plants.blind4_protocols import BLIND4_PROTOCOLS, with_s_sweep
-from tests.plants.blind4_rig import RANGE_MM, rig_reading, supply_droop
-from tests.plants.properties import (
+from bench.plants.blind4_protocols import BLIND4_PROTOCOLS, with_s_sweep
+from bench.plants.blind4_rig import RANGE_MM, rig_reading, supply_droop
+from bench.plants.properties import (
     assert_any_duration_builds,
     assert_closed_loop_3_to_20_percent_wide,
     assert_deterministic_by_seed,
@@ -65,7 +65,7 @@ from tests.plants.properties import (
     slow_and_fast_triangles,
     step_and_hold,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
+from bench.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 40.0
 CASES = blind4_cases(DURATION_S)

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.plants import (
+from bench.plants import (
     blind2_effects,
     blind2_family,
     blind2_protocols,
@@ -40,15 +40,15 @@ from tests.plants import (
     fresh_protocols,
     protocols,
 )
-from tests.plants.blind5_cores import BLIND5_CORES, draw_params
-from tests.plants.blind5_effects import (
+from bench.plants.blind5_cores import BLIND5_CORES, draw_params
+from bench.plants.blind5_effects import (
     BLIND5_FORMS,
     LOAD_PATTERNS,
     TEMPERATURE_PATTERNS,
     draw_effect_params,
     render,
 )
-from tests.plants.blind5_family import (
+from bench.plants.blind5_family import (
     BLIND5_PLANTS,
     BLIND5_RATES_HZ,
     NONE_PER_PLANT,
@@ -60,9 +60,9 @@ from tests.plants.blind5_family import (
     measurement_from,
     simulate,
 )
-from tests.plants.blind5_protocols import BLIND5_PROTOCOLS, with_valve_sweep
-from tests.plants.blind5_rig import dropped_frames, regulator, stroke_reading, transducer_reading
-from tests.plants.properties import (
+from bench.plants.blind5_protocols import BLIND5_PROTOCOLS, with_valve_sweep
+from bench.plants.blind5_rig import dropped_frames, regulator, stroke_reading, transducer_reading
+from bench.plants.properties import (
     assert_any_duration_builds,
     assert_closed_loop_3_to_20_percent_wide,
     assert_deterministic_by_seed,
@@ -70,7 +70,7 @@ from tests.plants.properties import (
     slow_and_fast_triangles,
     step_and_hold,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
+from bench.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 60.0
 CASES = blind5_cases(DURATION_S)

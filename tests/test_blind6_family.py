@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.plants import (
+from bench.plants import (
     blind2_effects,
     blind2_family,
     blind2_protocols,
@@ -44,8 +44,8 @@ from tests.plants import (
     fresh_protocols,
     protocols,
 )
-from tests.plants.blind6_cores import BLIND6_CORES, draw_params
-from tests.plants.blind6_effects import (
+from bench.plants.blind6_cores import BLIND6_CORES, draw_params
+from bench.plants.blind6_effects import (
     BLIND6_FORMS,
     LOAD_PATTERNS,
     TEMPERATURE_PATTERNS,
@@ -53,7 +53,7 @@ from tests.plants.blind6_effects import (
     pilot_lag_s,
     render,
 )
-from tests.plants.blind6_family import (
+from bench.plants.blind6_family import (
     BLIND6_PLANTS,
     BLIND6_RATES_HZ,
     NONE_PER_PLANT,
@@ -65,9 +65,9 @@ from tests.plants.blind6_family import (
     measurement_from,
     simulate,
 )
-from tests.plants.blind6_protocols import BLIND6_PROTOCOLS, with_choked_sweep
-from tests.plants.blind6_rig import compressor_bursts, snubbed_reading, spool_valve, stroke_reading
-from tests.plants.properties import (
+from bench.plants.blind6_protocols import BLIND6_PROTOCOLS, with_choked_sweep
+from bench.plants.blind6_rig import compressor_bursts, snubbed_reading, spool_valve, stroke_reading
+from bench.plants.properties import (
     assert_any_duration_builds,
     assert_closed_loop_3_to_20_percent_wide,
     assert_deterministic_by_seed,
@@ -76,7 +76,7 @@ from tests.plants.properties import (
     step_and_hold,
     triangles,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
+from bench.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 60.0
 CASES = blind6_cases(DURATION_S)

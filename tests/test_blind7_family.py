@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.plants import (
+from bench.plants import (
     blind2_effects,
     blind2_family,
     blind2_protocols,
@@ -49,8 +49,8 @@ from tests.plants import (
     fresh_protocols,
     protocols,
 )
-from tests.plants.blind7_cores import BLIND7_CORES, draw_params, ising_locked_share
-from tests.plants.blind7_effects import (
+from bench.plants.blind7_cores import BLIND7_CORES, draw_params, ising_locked_share
+from bench.plants.blind7_effects import (
     BLIND7_FORMS,
     LOAD_PATTERNS,
     TEMPERATURE_PATTERNS,
@@ -62,7 +62,7 @@ from tests.plants.blind7_effects import (
     render,
     ultrasonic_lag,
 )
-from tests.plants.blind7_family import (
+from bench.plants.blind7_family import (
     BLIND7_PLANTS,
     BLIND7_RATES_HZ,
     NONE_PER_PLANT,
@@ -74,10 +74,10 @@ from tests.plants.blind7_family import (
     measurement_from,
     simulate,
 )
-from tests.plants.blind7_protocols import BLIND7_PROTOCOLS, with_preconditioning
-from tests.plants.blind7_rig import muscle_pressure, popcorn_noise, valve_pressure
-from tests.plants.filters import lowpass
-from tests.plants.properties import (
+from bench.plants.blind7_protocols import BLIND7_PROTOCOLS, with_preconditioning
+from bench.plants.blind7_rig import muscle_pressure, popcorn_noise, valve_pressure
+from bench.plants.filters import lowpass
+from bench.plants.properties import (
     assert_any_duration_builds,
     assert_closed_loop_3_to_20_percent_wide,
     assert_deterministic_by_seed,
@@ -86,7 +86,7 @@ from tests.plants.properties import (
     step_and_hold,
     triangles,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
+from bench.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 60.0
 CASES = blind7_cases(DURATION_S)

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.plants import (
+from bench.plants import (
     blind2_effects,
     blind2_family,
     blind2_protocols,
@@ -48,13 +48,13 @@ from tests.plants import (
     fresh_protocols,
     protocols,
 )
-from tests.plants.blind8_effects import (
+from bench.plants.blind8_effects import (
     BLIND8_FORMS,
     LOAD_PATTERNS,
     TEMPERATURE_PATTERNS,
     render,
 )
-from tests.plants.blind8_family import (
+from bench.plants.blind8_family import (
     BLIND8_PLANTS,
     BLIND8_RATES_HZ,
     NONE_PER_PLANT,
@@ -66,8 +66,8 @@ from tests.plants.blind8_family import (
     measurement_from,
     simulate,
 )
-from tests.plants.blind8_protocols import BLIND8_PROTOCOLS, with_shakedown
-from tests.plants.blind8_rig import (
+from bench.plants.blind8_protocols import BLIND8_PROTOCOLS, with_shakedown
+from bench.plants.blind8_rig import (
     anti_alias,
     autozero_steps,
     muscle_pressure,
@@ -75,12 +75,12 @@ from tests.plants.blind8_rig import (
     sar_bit_error,
     stroke_reading,
 )
-from tests.plants.properties import (
+from bench.plants.properties import (
     assert_any_duration_builds,
     assert_deterministic_by_seed,
     assert_effect_size_as_recorded,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
+from bench.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 60.0
 CASES = blind8_cases(DURATION_S)

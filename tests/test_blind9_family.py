@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.plants import (
+from bench.plants import (
     blind2_effects,
     blind2_family,
     blind2_protocols,
@@ -51,8 +51,8 @@ from tests.plants import (
     fresh_protocols,
     protocols,
 )
-from tests.plants.blind9_effects import BLIND9_FORMS, LOAD_PATTERNS, TEMPERATURE_PATTERNS, render
-from tests.plants.blind9_family import (
+from bench.plants.blind9_effects import BLIND9_FORMS, LOAD_PATTERNS, TEMPERATURE_PATTERNS, render
+from bench.plants.blind9_family import (
     BLIND9_PLANTS,
     BLIND9_RATES_HZ,
     LOAD_READ_KG,
@@ -65,8 +65,8 @@ from tests.plants.blind9_family import (
     measurement_from,
     simulate,
 )
-from tests.plants.blind9_protocols import BLIND9_PROTOCOLS, with_shakedown
-from tests.plants.blind9_rig import (
+from bench.plants.blind9_protocols import BLIND9_PROTOCOLS, with_shakedown
+from bench.plants.blind9_rig import (
     load_cell_zero_shift,
     muscle_pressure,
     rail_dip,
@@ -75,13 +75,13 @@ from tests.plants.blind9_rig import (
     stroke_reading,
     wire_wound,
 )
-from tests.plants.families import FAMILIES
-from tests.plants.properties import (
+from bench.plants.families import FAMILIES
+from bench.plants.properties import (
     assert_any_duration_builds,
     assert_deterministic_by_seed,
     assert_effect_size_as_recorded,
 )
-from tests.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
+from bench.plants.visibility import EFFECT_MIN_OVER_NOISE, rms
 
 DURATION_S = 40.0
 CASES = blind9_cases(DURATION_S)

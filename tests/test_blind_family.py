@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.plants import effects, family, fresh_effects, fresh_family, fresh_protocols
-from tests.plants.blind_cores import BLIND_CORES, Hooks
-from tests.plants.blind_effects import BLIND_FORMS, render
-from tests.plants.blind_family import (
+from bench.plants import effects, family, fresh_effects, fresh_family, fresh_protocols
+from bench.plants.blind_cores import BLIND_CORES, Hooks
+from bench.plants.blind_effects import BLIND_FORMS, render
+from bench.plants.blind_family import (
     BLIND_PLANTS,
     NONE_PER_PLANT,
     blind_cases,
@@ -28,8 +28,8 @@ from tests.plants.blind_family import (
     measurement_from,
     simulate,
 )
-from tests.plants.blind_protocols import BLIND_PROTOCOLS, vented_start
-from tests.plants.visibility import EFFECT_MAX_OVER_SPAN, EFFECT_MIN_OVER_NOISE
+from bench.plants.blind_protocols import BLIND_PROTOCOLS, vented_start
+from bench.plants.visibility import EFFECT_MAX_OVER_SPAN, EFFECT_MIN_OVER_NOISE
 
 DURATION_S = 40.0
 CASES = blind_cases(DURATION_S)
@@ -160,7 +160,7 @@ def test_full_length_cases_keep_their_effects_visible_and_modest() -> None:
 
 def test_preisach_memory_matches_a_brute_force_plane_of_crisp_relays() -> None:
     """The Everett/wiping-out shortcut equals switching every relay of the same grid one by one."""
-    from tests.plants.blind_cores import _everett_tables, preisach_share
+    from bench.plants.blind_cores import _everett_tables, preisach_share
 
     rng = np.random.default_rng(3)
     params = draw_blind_params("preisach_resonant", rng, 4.0)
@@ -183,7 +183,7 @@ def test_preisach_memory_matches_a_brute_force_plane_of_crisp_relays() -> None:
 
 
 def test_chamber_air_heats_on_filling_and_leaves_a_thermal_tail() -> None:
-    from tests.plants.blind_cores import chamber_pressure
+    from bench.plants.blind_cores import chamber_pressure
 
     rng = np.random.default_rng(4)
     params = draw_blind_params("valve_chamber", rng, 4.0)

@@ -16,16 +16,16 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.plants import family
-from tests.plants.fresh_cores import (
+from bench.plants import family
+from bench.plants.fresh_cores import (
     FRESH_CORES,
     RATE_INDEPENDENT,
     Hooks,
     draw_fresh_params,
     mckibben_contraction,
 )
-from tests.plants.fresh_effects import FRESH_FORMS
-from tests.plants.fresh_family import (
+from bench.plants.fresh_effects import FRESH_FORMS
+from bench.plants.fresh_family import (
     FRESH_PLANTS,
     NONE_PER_PLANT,
     fresh_cases,
@@ -33,8 +33,8 @@ from tests.plants.fresh_family import (
     measurement_from,
     simulate,
 )
-from tests.plants.fresh_protocols import FRESH_PROTOCOLS, vented_full_cycle
-from tests.plants.protocols import PROTOCOLS
+from bench.plants.fresh_protocols import FRESH_PROTOCOLS, vented_full_cycle
+from bench.plants.protocols import PROTOCOLS
 
 DURATION_S = 30.0
 CASES = fresh_cases(DURATION_S)

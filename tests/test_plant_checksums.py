@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.plants.families import FAMILIES
+from bench.plants.families import FAMILIES
 
 DURATION_S = 20.0  # s: the shortest record every protocol of every family builds
 DECIMALS = 6  # of each column, in its own unit (s, bar, mm, kg, degC): far above a BLAS update's reach
