@@ -25,26 +25,18 @@ as the compressor cycles (0.4-1.2 % over 25-60 s), the linkage backlash plus the
 thermal offset wander (not the temperature column's), 1/f noise and rare clipped spikes; sensor
 noise 0.015-0.04 mm per plant with 0.02 mm quantisation; load (read to 0.005 kg) and
 temperature (read to 0.05 K) columns that always move and act only in their own effect's
-records. The table of every case: ``python -m bench.plants.blind4_family 100``.
+records. The table of every case: ``python -m bench.plants blind4 100``.
 """
 
 from __future__ import annotations
-
-from typing import Any
-
-import numpy as np
-from numpy.typing import NDArray
 
 from bench.plants.blind4_cores import BLIND4_CORES, draw_params
 from bench.plants.blind4_effects import BLIND4_FORMS, INTENSITY_KEY, columns, draw_effect_params, render
 from bench.plants.blind4_protocols import BLIND4_PROTOCOLS, with_s_sweep
 from bench.plants.blind4_rig import supply_droop
-from bench.plants.family import Case
-from bench.plants.recording import Sensors, case_table, recorded
-from bench.plants.visibility import visible_effect
-from host.data import Measurement
+from bench.plants.engine import FamilySpec, core_first, shifted
+from bench.plants.recording import Sensors
 
-Array = NDArray[np.float64]
 BLIND4_PLANTS = tuple(BLIND4_CORES)
 BLIND4_RATES_HZ = (72.0, 144.0, 320.0, 96.0, 420.0, 180.0)
 NOISE_MM = {"masing_tondu": 0.025, "tellinen_sleeve": 0.035, "bliman_sorine": 0.04, "stoner_crimps": 0.015}
@@ -57,68 +49,24 @@ SEED_BASE = 21000
 SENSORS = Sensors(70_000, QUANT_MM, LOAD_NOISE_KG, LOAD_READ_KG, TEMP_NOISE_K, TEMP_READ_K)
 
 
-def blind4_cases(duration_s: float = 150.0) -> list[Case]:
-    """Every effect-form on every blind4 core plus :data:`NONE_PER_PLANT` effect-free records
-    each (60 records); protocols (5) and rates (6) rotate so every pair occurs, and every form
-    meets four protocols and several rates."""
-    out: list[Case] = []
-    protocols, n_rates = list(BLIND4_PROTOCOLS), len(BLIND4_RATES_HZ)
-    i = 0
-    for p_index, plant in enumerate(BLIND4_PLANTS):
-        for effect, forms in BLIND4_FORMS.items():
-            for form in forms:
-                for _ in range(NONE_PER_PLANT if effect == "none" else 1):
-                    # the plant shifts the protocol and (twice over) the rate, so one form meets
-                    # four protocols and four rates over the four plants
-                    protocol = protocols[(i + p_index) % len(protocols)]
-                    rate = BLIND4_RATES_HZ[(i + 2 * p_index) % n_rates]
-                    out.append(Case(plant, effect, form, protocol, rate, SEED_BASE + i, duration_s))
-                    i += 1
-    return out
-
-
-def simulate(case: Case) -> dict[str, Any]:
-    """Noise-free outputs with and without the effect, the input, the columns and the truth."""
-    if case.plant not in BLIND4_CORES:
-        raise KeyError(f"unknown blind4 plant {case.plant!r}; known: {', '.join(BLIND4_CORES)}")
-    rng = np.random.default_rng(case.seed)
-    dt = 1.0 / case.rate_hz
-    peak = float(rng.uniform(3.0, 6.0))  # bar
-    u = with_s_sweep(case.protocol, case.duration_s, dt, peak, rng)
-    t = np.arange(u.size, dtype=np.float64) * dt
-    core = BLIND4_CORES[case.plant]
-    params = draw_params(case.plant, rng, peak)
-    load, temperature, load_pattern, temp_pattern = columns(t, rng)
-    q = draw_effect_params(case.effect, case.form, rng)
-    noise = NOISE_MM[case.plant]
-    base = core(supply_droop(u, dt, params), dt, params)
-    off = render(core, params, u, dt, "none", q, load, temperature, base)
-
-    def with_effect() -> Array:
-        return render(core, params, u, dt, case.form, q, load, temperature, base)
-
-    key, patterns = INTENSITY_KEY.get(case.form, ""), (load_pattern, temp_pattern)  # no key: effect-free
-    on, truth = visible_effect(case.effect, case.form, with_effect, off, noise, q, key, 1.3, params, patterns)
-    return {"t": t, "u": u, "on": on, "off": off, "load": load, "temperature": temperature, "truth": truth}
-
-
-def measurement_from(case: Case, sim: dict[str, Any]) -> tuple[Measurement, dict[str, Any]]:
-    """The recording of ``case`` from its :func:`simulate` result (:data:`SENSORS`)."""
-    return recorded(case, sim, SENSORS)
-
-
-def blind4_measurement(case: Case) -> tuple[Measurement, dict[str, Any]]:
-    """The recording of ``case`` and its truth (effect, form, parameters, effect size [mm], effect
-    size over noise and over span, rescale, column patterns). Deterministic by ``case.seed``."""
-    return measurement_from(case, simulate(case))
-
-
-def report_table(duration_s: float = 100.0) -> str:
-    """A Markdown table of every case, a per-effect summary and the CPU seconds it took."""
-    return case_table(blind4_cases(duration_s), simulate, duration_s)
-
-
-if __name__ == "__main__":
-    import sys
-
-    print(report_table(float(sys.argv[1]) if len(sys.argv) > 1 else 100.0))
+SPEC = FamilySpec(
+    name="blind4",
+    cores=BLIND4_CORES,
+    forms=BLIND4_FORMS,
+    protocols=tuple(BLIND4_PROTOCOLS),
+    rates_hz=BLIND4_RATES_HZ,
+    noise_mm=NOISE_MM,
+    seed_base=SEED_BASE,
+    rotate=shifted(1, 2),
+    excite=with_s_sweep,
+    draw_params=draw_params,
+    columns=lambda r, rng: columns(r.t, rng),
+    draw_effect=draw_effect_params,
+    render=core_first(render),
+    intensity_key=INTENSITY_KEY,
+    sensors={p: SENSORS for p in NOISE_MM},
+    none_per_plant=NONE_PER_PLANT,
+    # its measurement noise is seeded at the same offset as blind2's (70 000)
+    tags=frozenset({"shares_seed_offset"}),
+    base=lambda r: r.core(supply_droop(r.u, r.dt, r.params), r.dt, r.params),
+)

@@ -22,7 +22,7 @@ numbers, and never used to choose or tune anything.
 
 Effect sizes are spread over the band: each effect record draws a target size, log-uniform in
 1-10 % of the span (at least 6 x its noise), and the form's intensity is calibrated to it
-(:func:`bench.plants.blind5_family.calibrate`: up to three proportional passes, at most 3 x from
+(:func:`bench.plants.visibility.calibrate`: up to three proportional passes, at most 3 x from
 the drawn intensity either way, recorded in the truth as ``target_over_span`` and
 ``calibration``); then, as in every held-out family,
 :func:`bench.plants.visibility.visible_effect` makes sure the size lies in ``[5 x noise, 12 %
@@ -37,7 +37,7 @@ multiplexer's channel skew (the stroke converted 0.1-0.6 ms after its time stamp
 reading step of 0.0025-0.02 mm per plant; load (read to 0.005 kg) and temperature (read to
 1/16 K, a digital thermometer's step) columns that always move and act only in their own
 effect's records (one temperature pattern follows the valve's duty: a decoy correlated with the
-input's slow mean). The table of every case: ``python -m bench.plants.blind7_family 100``.
+input's slow mean). The table of every case: ``python -m bench.plants blind7 100``.
 """
 
 from __future__ import annotations
@@ -45,19 +45,14 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
-from bench.plants.blind5_family import calibrate
 from bench.plants.blind7_cores import BLIND7_CORES, draw_params
 from bench.plants.blind7_effects import BLIND7_FORMS, INTENSITY_KEY, columns, draw_effect_params, render
 from bench.plants.blind7_protocols import BLIND7_PROTOCOLS, with_preconditioning
 from bench.plants.blind7_rig import pressure_reading, valve_pressure
-from bench.plants.family import Case
-from bench.plants.recording import Sensors, case_table, recorded
-from bench.plants.visibility import visible_effect
-from host.data import Measurement
+from bench.plants.engine import Calibration, Case, FamilySpec, Record, params_first, shifted
+from bench.plants.recording import Sensors, recorded
 
-Array = NDArray[np.float64]
 BLIND7_PLANTS = tuple(BLIND7_CORES)
 BLIND7_RATES_HZ = (44.0, 212.0, 560.0, 87.0, 365.0, 138.0)
 NOISE_MM = {
@@ -80,91 +75,33 @@ SEED_OFFSET = 170_000  # measurement noise seeded at case.seed + 170_000, indepe
 SENSORS = {
     p: Sensors(SEED_OFFSET, QUANT_MM[p], LOAD_NOISE_KG, LOAD_READ_KG, TEMP_NOISE_K, TEMP_READ_K) for p in NOISE_MM
 }
-TARGET_OVER_SPAN = (0.01, 0.1)
-TARGET_MIN_OVER_NOISE = 6.0
-LOAD_TEMP_EFFECTS = ("load_dependence", "temperature_drift")
 
 
-def blind7_cases(duration_s: float = 150.0) -> list[Case]:
-    """Every effect-form on every blind7 core plus :data:`NONE_PER_PLANT` effect-free records
-    each (60 records); protocols (5) and rates (6) rotate so every pair occurs, and every form
-    meets several protocols and rates."""
-    out: list[Case] = []
-    protocols, n_rates = list(BLIND7_PROTOCOLS), len(BLIND7_RATES_HZ)
-    i = 0
-    for p_index, plant in enumerate(BLIND7_PLANTS):
-        for effect, forms in BLIND7_FORMS.items():
-            for form in forms:
-                for _ in range(NONE_PER_PLANT if effect == "none" else 1):
-                    protocol = protocols[(i + 3 * p_index) % len(protocols)]
-                    rate = BLIND7_RATES_HZ[(i + 2 * p_index) % n_rates]
-                    out.append(Case(plant, effect, form, protocol, rate, SEED_BASE + i, duration_s))
-                    i += 1
-    return out
-
-
-def simulate(case: Case) -> dict[str, Any]:
-    """Noise-free outputs with and without the effect, the recorded input (the pressure at the
-    valve's outlet, noise-free: :func:`measurement_from` adds the transducer's noise and step),
-    the set pressure ``command`` [bar] the valve got, the columns and the truth."""
-    if case.plant not in BLIND7_CORES:
-        raise KeyError(f"unknown blind7 plant {case.plant!r}; known: {', '.join(BLIND7_CORES)}")
-    rng = np.random.default_rng(case.seed)
-    dt = 1.0 / case.rate_hz
-    peak = float(rng.uniform(3.0, 6.0))  # bar
-    u = with_preconditioning(case.protocol, case.duration_s, dt, peak, rng)
-    t = np.arange(u.size, dtype=np.float64) * dt
-    params = draw_params(case.plant, rng, peak)
-    load, temperature, load_pattern, temp_pattern = columns(t, u, peak, rng)
-    q = draw_effect_params(case.effect, case.form, rng)
-    share = float(np.exp(rng.uniform(*np.log(TARGET_OVER_SPAN))))
-    noise = NOISE_MM[case.plant]
-    base = BLIND7_CORES[case.plant](u, dt, params)
-    if case.effect in LOAD_TEMP_EFFECTS:  # the same plant with its column held still
-        held_load, held_temp = np.full_like(load, load[0]), np.full_like(temperature, temperature[0])
-        off = render(params, u, dt, case.form, q, held_load, held_temp, base)
-    else:
-        off = render(params, u, dt, "none", q, load, temperature, base)
-
-    memo: dict[float, Array] = {}
-
-    def with_effect() -> Array:
-        key_value = q.get(INTENSITY_KEY.get(case.form, ""), 0.0)
-        if key_value not in memo:
-            memo.clear()
-            memo[key_value] = render(params, u, dt, case.form, q, load, temperature, base)
-        return memo[key_value]
-
-    key, patterns = INTENSITY_KEY.get(case.form, ""), (load_pattern, temp_pattern)  # no key: effect-free
-    if case.effect != "none":
-        target = max(share * float(np.ptp(off)), TARGET_MIN_OVER_NOISE * noise)
-        q["target_over_span"] = target / float(np.ptp(off))
-        calibrate(with_effect, off, q, key, target)
-    on, truth = visible_effect(case.effect, case.form, with_effect, off, noise, q, key, 1.3, params, patterns)
-    sim = {"t": t, "u": valve_pressure(u, dt, params), "command": u, "on": on, "off": off, "base": base}
-    return {**sim, "load": load, "temperature": temperature, "truth": truth}
-
-
-def measurement_from(case: Case, sim: dict[str, Any]) -> tuple[Measurement, dict[str, Any]]:
-    """The recording of ``case`` from its :func:`simulate` result (:data:`SENSORS` of its plant;
-    the input read by the pressure transducer)."""
+def _read(spec: FamilySpec, case: Case, sim: dict[str, Any]) -> Record:
+    """The input read by the pressure transducer."""
     input_rng = np.random.default_rng(case.seed + SEED_OFFSET + 1)
     read_input = pressure_reading(sim["u"], sim["truth"]["plant_parameters"], input_rng)
-    return recorded(case, {**sim, "u": read_input}, SENSORS[case.plant])
+    return recorded(case, {**sim, "u": read_input}, spec.sensors[case.plant])
 
 
-def blind7_measurement(case: Case) -> tuple[Measurement, dict[str, Any]]:
-    """The recording of ``case`` and its truth (effect, form, parameters, effect size [mm], effect
-    size over noise and over span, rescale, column patterns). Deterministic by ``case.seed``."""
-    return measurement_from(case, simulate(case))
-
-
-def report_table(duration_s: float = 100.0) -> str:
-    """A Markdown table of every case, a per-effect summary and the CPU seconds it took."""
-    return case_table(blind7_cases(duration_s), simulate, duration_s)
-
-
-if __name__ == "__main__":
-    import sys
-
-    print(report_table(float(sys.argv[1]) if len(sys.argv) > 1 else 100.0))
+SPEC = FamilySpec(
+    name="blind7",
+    cores=BLIND7_CORES,
+    forms=BLIND7_FORMS,
+    protocols=tuple(BLIND7_PROTOCOLS),
+    rates_hz=BLIND7_RATES_HZ,
+    noise_mm=NOISE_MM,
+    seed_base=SEED_BASE,
+    rotate=shifted(3, 2),
+    excite=with_preconditioning,
+    draw_params=draw_params,
+    columns=lambda r, rng: columns(r.t, r.u, r.peak, rng),
+    draw_effect=draw_effect_params,
+    render=params_first(render),
+    intensity_key=INTENSITY_KEY,
+    sensors=SENSORS,
+    none_per_plant=NONE_PER_PLANT,
+    read=_read,
+    recorded_input=lambda r: valve_pressure(r.u, r.dt, r.params),
+    calibration=Calibration(),
+)

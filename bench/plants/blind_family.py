@@ -18,25 +18,21 @@ thermal dynamics (a slow pressure tail after every move), the Preisach core's re
 LuGre core's presliding and payload mass, sensor noise 0.02-0.05 mm per plant, load read at
 0.001 kg with 0.01 kg noise, temperature read at 0.1 K with 0.05 K noise, and load and
 temperature columns that move (heater cycles, door steps, swinging payloads) and do nothing.
-The table of every case: ``python -m bench.plants.blind_family 100``.
+The table of every case: ``python -m bench.plants blind 100``.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from bench.plants.blind_cores import BAR_PA, BLIND_CORES, G_MS2, R_AIR, muscle_force
 from bench.plants.blind_effects import BLIND_FORMS, INTENSITY_KEY, columns, draw_effect_params, render
 from bench.plants.blind_protocols import BLIND_PROTOCOLS, vented_start
-from bench.plants.family import Case
-from bench.plants.visibility import visible_effect
-from host.data import Measurement
+from bench.plants.engine import FamilySpec, over_off
+from bench.plants.recording import rounded_reading
 
-Array = NDArray[np.float64]
 BLIND_PLANTS = tuple(BLIND_CORES)
 BLIND_RATES_HZ = (60.0, 150.0, 300.0, 100.0, 450.0, 200.0, 90.0)
 NOISE_MM = {"lugre_mckibben": 0.03, "preisach_resonant": 0.02, "asym_play_poly": 0.05, "valve_chamber": 0.04}
@@ -126,86 +122,24 @@ def draw_blind_params(core: str, rng: np.random.Generator, peak: float) -> dict[
     raise KeyError(f"unknown blind core {core!r}; known: {', '.join(BLIND_CORES)}")
 
 
-def blind_cases(duration_s: float = 150.0) -> list[Case]:
-    """Every effect-form on every blind core, plus :data:`NONE_PER_PLANT` effect-free records each
-    (60 records). Protocols (7) and rates (7) rotate so that every pair occurs."""
-    out: list[Case] = []
-    protocols = list(BLIND_PROTOCOLS)
-    i = 0
-    for plant in BLIND_PLANTS:
-        for effect, forms in BLIND_FORMS.items():
-            for form in forms:
-                for _ in range(NONE_PER_PLANT if effect == "none" else 1):
-                    protocol = protocols[i % len(protocols)]
-                    rate = BLIND_RATES_HZ[(i + i // len(protocols)) % len(BLIND_RATES_HZ)]
-                    out.append(Case(plant, effect, form, protocol, rate, SEED_BASE + i, duration_s))
-                    i += 1
-    return out
-
-
-def simulate(case: Case) -> dict[str, Any]:
-    """Noise-free outputs with and without the effect, the input, the columns and the truth."""
-    if case.plant not in BLIND_CORES:
-        raise KeyError(f"unknown blind plant {case.plant!r}; known: {', '.join(BLIND_CORES)}")
-    rng = np.random.default_rng(case.seed)
-    dt = 1.0 / case.rate_hz
-    peak = float(rng.uniform(3.0, 6.0))  # bar
-    u = vented_start(case.protocol, case.duration_s, dt, peak, rng)
-    t = np.arange(u.size, dtype=np.float64) * dt
-    core = BLIND_CORES[case.plant]
-    params = draw_blind_params(case.plant, rng, peak)
-    load, temperature, load_pattern, temp_pattern = columns(t, case.effect, rng)
-    q = draw_effect_params(case.effect, case.form, rng)
-    noise = NOISE_MM[case.plant]
-    off = render(core, params, u, dt, "none", q, load, temperature, None)
-
-    def with_effect() -> Array:
-        return render(core, params, u, dt, case.form, q, load, temperature, off)
-
-    key, patterns = INTENSITY_KEY.get(case.form, ""), (load_pattern, temp_pattern)  # no key: effect-free
-    on, truth = visible_effect(case.effect, case.form, with_effect, off, noise, q, key, 1.3, params, patterns)
-    return {"t": t, "u": u, "on": on, "off": off, "load": load, "temperature": temperature, "truth": truth}
-
-
-def measurement_from(case: Case, sim: dict[str, Any]) -> tuple[Measurement, dict[str, Any]]:
-    """The recording of ``case`` from its :func:`simulate` result: noisy output [mm], load [kg]
-    (0.01 kg noise, read to 0.001 kg) and temperature [degC] (0.05 K noise, read to 0.1 K)."""
-    rng = np.random.default_rng(case.seed + 50_000)  # measurement noise, independent of the plant draws
-    y = sim["on"] + rng.normal(0.0, sim["truth"]["noise"], sim["on"].size)
-    extras = {
-        "load": np.round(sim["load"] + rng.normal(0.0, 0.01, y.size), 3),
-        "temperature": np.round(sim["temperature"] + rng.normal(0.0, 0.05, y.size), 1),
-    }
-    return Measurement(sim["t"], sim["u"], y, extras, source=case.name), dict(sim["truth"])
-
-
-def blind_measurement(case: Case) -> tuple[Measurement, dict[str, Any]]:
-    """The recording of ``case`` and its truth (effect, form, parameters, effect size [mm], effect
-    size over noise and over span, rescale, column patterns). Deterministic by ``case.seed``."""
-    return measurement_from(case, simulate(case))
-
-
-def report_table(duration_s: float = 100.0) -> str:
-    """A Markdown table of every case and the CPU seconds it took to build them all."""
-    import time
-
-    start = time.process_time()
-    rows = [
-        "| plant | effect:form | protocol | rate [Hz] | effect/noise | effect/span | rescale | load/temperature |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    for case in blind_cases(duration_s):
-        truth = simulate(case)["truth"]
-        rows.append(
-            f"| {case.plant} | {case.effect}:{case.form} | {case.protocol} | {case.rate_hz:g} | "
-            f"{truth['effect_size_over_noise']:.1f} | {100 * truth['effect_size_over_span']:.1f} % | "
-            f"{truth['intensity_rescale']:.2f} | {truth['load_pattern']}/{truth['temperature_pattern']} |"
-        )
-    rows.append(f"\n{len(rows) - 2} cases of {duration_s:g} s built in {time.process_time() - start:.1f} CPU s")
-    return "\n".join(rows)
-
-
-if __name__ == "__main__":
-    import sys
-
-    print(report_table(float(sys.argv[1]) if len(sys.argv) > 1 else 100.0))
+SPEC = FamilySpec(
+    name="blind",
+    cores=BLIND_CORES,
+    forms=BLIND_FORMS,
+    protocols=tuple(BLIND_PROTOCOLS),
+    rates_hz=BLIND_RATES_HZ,
+    noise_mm=NOISE_MM,
+    seed_base=SEED_BASE,
+    rotate=lambda i, p: (i, i + i // len(BLIND_PROTOCOLS)),
+    excite=vented_start,
+    draw_params=draw_blind_params,
+    columns=lambda r, rng: columns(r.t, r.case.effect, rng),
+    draw_effect=draw_effect_params,
+    render=over_off(render),
+    intensity_key=INTENSITY_KEY,
+    none_per_plant=NONE_PER_PLANT,
+    # two of its rates are the tuning set's; its protocols start with a vent, not a sweep of the range
+    tags=frozenset({"shares_rates", "check_memory_known_early"}),
+    read=rounded_reading(50_000),  # measurement noise, independent of the plant draws
+    base=lambda r: None,
+)

@@ -11,11 +11,10 @@ effect-free records; protocols and sample rates (50-500 Hz) rotate over the case
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from bench.plants import cores, effects
+from bench.plants.case import Case
 from bench.plants.protocols import PROTOCOLS, with_conditioning
 from host.data import Measurement
 
@@ -24,21 +23,6 @@ NOISE_MM = 0.03
 TUNING_PLANTS = ("bouc_wen", "hil")
 SECOND_TUNING_PLANTS = ("generalised_play", "friction_spring")  # held out until diagnose v4
 NONE_PER_PLANT = 5
-
-
-@dataclass(frozen=True)
-class Case:
-    plant: str
-    effect: str
-    form: str
-    protocol: str
-    rate_hz: float
-    seed: int
-    duration_s: float = 150.0
-
-    @property
-    def name(self) -> str:
-        return f"{self.plant}/{self.effect}:{self.form}/{self.protocol}@{self.rate_hz:g}Hz/s{self.seed}"
 
 
 def cases(plants: tuple[str, ...], duration_s: float = 150.0) -> list[Case]:

@@ -1,4 +1,4 @@
-"""Property checks every blind plant family's tests make the same way (blind2 to blind5).
+"""Property checks shared by the plant contract (:mod:`bench.plants.contract`) and the families' own tests.
 
 Each family has its own cores, effects and protocols; what a record of any of them must satisfy
 (built the same for the same seed, any duration, a core's loop a plausible muscle loop) is
@@ -91,16 +91,3 @@ def slow_and_fast_triangles(
     """Two :func:`triangles` at each period: the same loop slow and fast, for checking that a
     rate effect grows with the input speed."""
     return [triangles(peak, dt, period, 2) for period in periods_s]
-
-
-def assert_effect_size_as_recorded(effect: str, sim: dict[str, Any], truth: dict[str, Any]) -> None:
-    """The effect's size (RMS of the noise-free output with it minus without) is what the truth
-    records; zero (the same output) on an effect-free record, else in the visibility band
-    ``[EFFECT_MIN_OVER_NOISE x noise, EFFECT_MAX_OVER_SPAN x span]`` after a rescale of 0.25-4."""
-    size = float(np.sqrt(np.mean((sim["on"] - sim["off"]) ** 2)))
-    assert np.isclose(size, truth["effect_size"], rtol=1e-6, atol=1e-12)
-    if effect == "none":
-        assert size == 0.0 and np.array_equal(sim["on"], sim["off"])
-        return
-    assert EFFECT_MIN_OVER_NOISE * truth["noise"] <= size <= EFFECT_MAX_OVER_SPAN * truth["span"]
-    assert 0.25 <= truth["intensity_rescale"] <= 4.0

@@ -2,7 +2,7 @@
 from a family's patterns, sensor noise and reading steps on the output, load and temperature
 channels, and the Markdown table of a family's cases.
 
-Shared by the blind2 and blind3 families (their recording code had been written twice).
+Shared by every family the engine (:mod:`bench.plants.engine`) records.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from bench.plants.family import Case
+from bench.plants.case import Case
 from host.data import Measurement
 
 Array = NDArray[np.float64]
@@ -65,6 +65,23 @@ def recorded(case: Case, sim: dict[str, Any], sensors: Sensors) -> tuple[Measure
         "temperature": read(sim["temperature"] + rng.normal(0.0, sensors.temp_noise_k, n), sensors.temp_read_k),
     }
     return Measurement(sim["t"], sim["u"], y, extras, source=case.name), dict(sim["truth"])
+
+
+def rounded_reading(seed_offset: int) -> Callable[[Any, Case, dict[str, Any]], tuple[Measurement, dict[str, Any]]]:
+    """The first held-out families' recording (a ``FamilySpec.read`` hook): the output [mm] with
+    the truth's noise and not quantised, load [kg] with 0.01 kg noise read to 0.001 kg and
+    temperature [degC] with 0.05 K noise read to 0.1 K, seeded at ``case.seed + seed_offset``."""
+
+    def read(spec: Any, case: Case, sim: dict[str, Any]) -> tuple[Measurement, dict[str, Any]]:
+        rng = np.random.default_rng(case.seed + seed_offset)
+        y = sim["on"] + rng.normal(0.0, sim["truth"]["noise"], sim["on"].size)
+        extras = {
+            "load": np.round(sim["load"] + rng.normal(0.0, 0.01, y.size), 3),
+            "temperature": np.round(sim["temperature"] + rng.normal(0.0, 0.05, y.size), 1),
+        }
+        return Measurement(sim["t"], sim["u"], y, extras, source=case.name), dict(sim["truth"])
+
+    return read
 
 
 def case_table(cases: list[Case], simulate: Callable[[Case], dict[str, Any]], duration_s: float) -> str:

@@ -16,6 +16,7 @@ EFFECT_MIN_OVER_NOISE = 5.0  # the brief asks >= 4x; 5x leaves room for the nois
 EFFECT_MAX_OVER_SPAN = 0.12  # the brief asks <= ~15 %
 MAX_RESCALE = 4.0
 RESCALE_PASSES = 8
+MAX_CALIBRATION = 3.0  # a calibrated family moves its drawn intensity at most 3 x either way, to stay plausible
 
 
 def rms(x: Array) -> float:
@@ -85,3 +86,20 @@ def visible_effect(
         "temperature_pattern": patterns[1],
     }
     return on, truth
+
+
+def calibrate(render_on: Callable[[], Array], off: Array, q: dict[str, float], key: str, target: float) -> None:
+    """Scale ``q[key]`` so that the effect's size (RMS [mm] of ``render_on() - off``) comes near
+    ``target`` [mm]: up to three proportional passes, in all at most :data:`MAX_CALIBRATION` x
+    either way (the size the drawn intensity gives is kept where the target is farther)."""
+    factor = 1.0
+    for _ in range(3):
+        size = rms(render_on() - off)
+        if size <= 0.0:
+            break
+        step = float(np.clip(target / size, 1.0 / MAX_CALIBRATION / factor, MAX_CALIBRATION / factor))
+        if abs(step - 1.0) < 0.05:
+            break
+        q[key] *= step
+        factor *= step
+    q["calibration"] = factor

@@ -1,0 +1,200 @@
+"""The promises every plant family keeps, written once as checks (scikit-learn's
+``estimator_checks`` shape): ``tests/test_plant_contract.py`` runs each check on every family of
+the registry, and a new family's author runs them the same way before scoring anything.
+
+A check takes a family's spec (and, for a per-record check, a case and its simulation) and
+raises ``AssertionError`` naming what broke. A family switches a check off with a tag of the
+check's name in ``FamilySpec.tags`` where the property does not apply to it (the tuning family
+keeps no effect-free twin; the first held-out families reuse protocols or rates of the tuning
+set), so every skip is written down beside the family, not in a test.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Callable, Iterable
+from typing import Any
+
+import numpy as np
+
+from bench.plants import engine
+from bench.plants.case import Case
+from bench.plants.engine import LOAD_TEMP_EFFECTS, FamilySpec, Run
+from bench.plants.properties import assert_any_duration_builds, assert_deterministic_by_seed
+from bench.plants.visibility import EFFECT_MAX_OVER_SPAN, EFFECT_MIN_OVER_NOISE, MAX_CALIBRATION, rms
+
+SPAN_MM = (8.0, 60.0)  # every family's effect-free stroke: a muscle's, not a sensor's
+LOAD_MOVES_KG, TEMPERATURE_MOVES_K = 0.3, 0.5  # the columns move in every record
+EARLY_SHARE = 0.2  # the memory is known within the first fifth of a record
+NOISE_REL = 0.2  # the recorded output's scatter about the truth is the truth's noise, to 20 %
+
+
+def _older(spec: FamilySpec, registry: Iterable[FamilySpec]) -> list[FamilySpec]:
+    return [other for other in registry if other.seed_base < spec.seed_base]
+
+
+def check_cases_cover_the_spec(spec: FamilySpec) -> None:
+    """Every effect-form on every core once (effect-free ``none_per_plant`` times), distinct
+    seeds, every protocol and every rate used, and every protocol-rate pair met."""
+    cases = engine.cases(spec, 1.0)
+    per = Counter((c.plant, c.effect, c.form) for c in cases)
+    for plant in spec.plants:
+        for effect, forms in spec.forms.items():
+            for form in forms:
+                assert per[(plant, effect, form)] == (spec.none_per_plant if effect == "none" else 1), (plant, form)
+    assert len({c.seed for c in cases}) == len(cases)
+    assert {c.protocol for c in cases} == set(spec.protocols) and {c.rate_hz for c in cases} == set(spec.rates_hz)
+    if "pairs" not in spec.tags:
+        assert len({(c.protocol, c.rate_hz) for c in cases}) == len(spec.protocols) * len(spec.rates_hz)
+
+
+def check_unlike_every_older_family(spec: FamilySpec, registry: Iterable[FamilySpec]) -> None:
+    """New cores, forms (of a real effect), protocols, rates and seeds: nothing an older family
+    (lower seeds) has; tags ``shares_protocols`` / ``shares_rates`` record a family that reuses them."""
+    older = _older(spec, registry)
+    mine = {c.seed for c in engine.cases(spec, 1.0)}
+    for other in older:
+        assert not set(spec.plants) & set(other.plants), (other.name, "plants")
+        forms = {f for e, fs in spec.forms.items() if e != "none" for f in fs}
+        assert not forms & {f for e, fs in other.forms.items() if e != "none" for f in fs}, (other.name, "forms")
+        if "shares_protocols" not in spec.tags:
+            assert not set(spec.protocols) & set(other.protocols), (other.name, "protocols")
+        if "shares_rates" not in spec.tags:
+            assert not set(spec.rates_hz) & set(other.rates_hz), (other.name, "rates")
+        assert not mine & {c.seed for c in engine.cases(other, 1.0)}, (other.name, "seeds")
+        offsets = {s.seed_offset for s in spec.sensors.values()} & {s.seed_offset for s in other.sensors.values()}
+        assert not offsets or "shares_seed_offset" in spec.tags, (other.name, "measurement seed offset")
+
+
+def check_deterministic_by_seed(spec: FamilySpec) -> None:
+    """A case recorded twice is the same record; the next seed gives another."""
+    assert_deterministic_by_seed(engine.cases(spec, 30.0), lambda case: engine.measurement(spec, case))
+
+
+def check_any_duration_builds(spec: FamilySpec) -> None:
+    """A record of 30 s and of 200 s has its length, finite samples and a visible, modest effect."""
+    for duration_s in (30.0, 200.0):
+        assert_any_duration_builds(lambda d: engine.cases(spec, d), lambda c: engine.measurement(spec, c), duration_s)
+
+
+def check_delay_forms_lag(sims: Iterable[tuple[Case, dict[str, Any]]]) -> None:
+    """A transport delay's output lags its effect-free twin (the best shift is not zero)."""
+    for case, sim in sims:
+        if case.effect == "transport_delay":
+            on, off = sim["on"], sim["off"]
+            lags = np.arange(0, int(0.4 * case.rate_hz))
+            misfit = [float(np.mean((on[k:] - off[: off.size - k]) ** 2)) for k in lags]
+            assert lags[int(np.argmin(misfit))] > 0, case.name
+
+
+def check_sizes_spread_over_the_band(spec: FamilySpec, sims: Iterable[tuple[Case, dict[str, Any]]]) -> None:
+    """A calibrated family's effect sizes reach from ~1 % of the span to several %."""
+    shares = np.array([s["truth"]["effect_size_over_span"] for c, s in sims if c.effect != "none"])
+    assert np.min(shares) < 0.015 and np.max(shares) > 0.06 and 0.015 <= np.median(shares) <= 0.06
+
+
+def check_protocols_start_vented_and_cover_the_range(spec: FamilySpec) -> None:
+    """Each protocol (60 s at the slowest rate, three seeds) starts vented, stays in
+    ``[0, peak]`` and keeps covering the range after its first fifth."""
+    dt, peak = 1.0 / min(spec.rates_hz), 4.0
+    for seed in range(3):
+        for protocol in spec.protocols:
+            u = spec.excite(protocol, 60.0, dt, peak, np.random.default_rng(seed))
+            assert u.size == int(round(60.0 / dt)) and np.all(np.isfinite(u)) and u[0] == 0.0, protocol
+            early = int(EARLY_SHARE * u.size)
+            assert u.min() >= 0.0 and u.max() <= peak + 1e-9, protocol
+            assert np.ptp(u[early:]) > 0.3 * peak, protocol
+
+
+def check_record(spec: FamilySpec, case: Case, sim: dict[str, Any]) -> None:
+    """The recording is finite, on its time grid, its output on the sensor's reading step with
+    the truth's noise, its columns move, its span a muscle's; the effect's size is what the
+    truth says and lies in the visibility band (zero in an effect-free record)."""
+    m, truth = engine.measurement_from(spec, case, sim)
+    n = int(round(case.duration_s * case.rate_hz))
+    assert len(m) == m.u.size == m.y.size == n and np.all(np.isfinite(m.y)) and np.all(np.isfinite(m.u))
+    assert np.allclose(np.diff(m.t), 1.0 / case.rate_hz) and m.source == case.name
+    assert (truth["effect"], truth["form"]) == (case.effect, case.form) and set(m.extras) == {"load", "temperature"}
+    assert np.ptp(m.extras["load"]) >= LOAD_MOVES_KG and np.ptp(m.extras["temperature"]) >= TEMPERATURE_MOVES_K
+    assert SPAN_MM[0] <= truth["span"] <= SPAN_MM[1]
+    sensors = spec.sensors.get(case.plant)
+    if sensors is not None:
+        assert np.allclose(m.y / sensors.quant_mm, np.round(m.y / sensors.quant_mm), atol=1e-6)
+    # the scatter where the output moves slowly (< 5 mm/s: a time-base error adds nothing there),
+    # and, where the rig drops frames, not on a frame that repeats the one before
+    slow = np.abs(np.gradient(sim["on"], 1.0 / case.rate_hz)) < 5.0
+    if truth.get("dropped_frames", 0):
+        slow[np.flatnonzero(np.diff(m.y) == 0.0) + 1] = False
+    scatter = float(np.std((m.y - sim["on"])[slow]))
+    assert abs(scatter - truth["noise"]) <= NOISE_REL * truth["noise"], (scatter, truth["noise"])
+    size = rms(sim["on"] - sim["off"])
+    assert np.isclose(size, truth["effect_size"], rtol=1e-6, atol=1e-12)
+    if case.effect == "none":
+        assert size == 0.0
+        return
+    assert EFFECT_MIN_OVER_NOISE * truth["noise"] <= size <= EFFECT_MAX_OVER_SPAN * truth["span"]
+    assert 0.25 <= truth["intensity_rescale"] <= 4.0
+    if spec.calibration is not None:
+        calibration = truth["parameters"]["calibration"]
+        assert 1.0 / MAX_CALIBRATION - 1e-9 <= calibration <= MAX_CALIBRATION + 1e-9
+
+
+def rerun(spec: FamilySpec, case: Case, sim: dict[str, Any]) -> Run:
+    """The :class:`bench.plants.engine.Run` a simulation was rendered from, rebuilt from it."""
+    params = sim["truth"]["plant_parameters"]
+    peak = float(params.get("peak", np.max(sim["command"])))
+    dt = 1.0 / case.rate_hz
+    return Run(case, spec.cores[case.plant], dt, peak, sim["command"], sim["t"], params, sim.get("base"))
+
+
+def check_columns_act_only_in_their_own_records(spec: FamilySpec, case: Case, sim: dict[str, Any]) -> None:
+    """Holding the load (or the temperature) still changes nothing unless the record's effect is
+    the load's (the temperature's), and then it changes the output by more than the noise."""
+    assert spec.render is not None
+    truth, run = sim["truth"], rerun(spec, case, sim)
+    q = dict(truth["parameters"])
+    still_load = np.full_like(sim["load"], float(sim["load"][0]))
+    still_temp = np.full_like(sim["temperature"], float(sim["temperature"][0]))
+    for load, temp, which in ((still_load, sim["temperature"], "load"), (sim["load"], still_temp, "temperature")):
+        again = spec.render(run, case.form, q, load, temp, sim["off"])
+        change = rms(again - sim["on"])
+        if case.effect in (f"{which}_dependence", f"{which}_drift"):
+            assert change >= 0.5 * EFFECT_MIN_OVER_NOISE * truth["noise"], (which, change)
+        else:
+            assert change == 0.0, (which, change)
+
+
+def check_memory_known_early(spec: FamilySpec, case: Case, sim: dict[str, Any]) -> None:
+    """The record starts vented and at rest (within 0.3 mm of zero, or of its lowest point where
+    a held load stretches the muscle below it), and its first fifth reaches the peak and sweeps
+    most of the stroke (the hysteresis memory is known early)."""
+    early = int(EARLY_SHARE * sim["command"].size)
+    u, off = sim["command"], sim["off"]
+    assert u[0] == 0.0 and min(abs(off[0]), abs(off[0] - np.min(off))) < 0.3
+    assert np.max(u[:early]) >= 0.96 * np.max(u) and np.ptp(off[:early]) >= 0.85 * np.ptp(off)
+
+
+FAMILY_CHECKS: tuple[Callable[[FamilySpec], None], ...] = (
+    check_cases_cover_the_spec,
+    check_deterministic_by_seed,
+    check_any_duration_builds,
+    check_protocols_start_vented_and_cover_the_range,
+)
+RECORD_CHECKS: tuple[Callable[[FamilySpec, Case, dict[str, Any]], None], ...] = (
+    check_record,
+    check_memory_known_early,
+)
+
+
+def applies(check: Callable[..., None], spec: FamilySpec) -> bool:
+    """Whether ``check`` runs on ``spec``: not if the family is tagged with the check's name, and
+    the record checks only on families the engine simulates."""
+    name = check.__name__
+    if name in spec.tags:
+        return False
+    simulated = spec.custom_record is None
+    return simulated or name in ("check_deterministic_by_seed", "check_cases_cover_the_spec")
+
+
+def load_or_temperature(case: Case) -> bool:
+    return case.effect == "none" or case.effect in LOAD_TEMP_EFFECTS
