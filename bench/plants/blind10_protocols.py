@@ -27,19 +27,17 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
+from bench.plants.grids import time_grid
+
 Array = NDArray[np.float64]
 Protocol = Callable[[float, float, float, np.random.Generator], Array]
-
-
-def _t(duration_s: float, dt_s: float) -> Array:
-    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
 
 
 def frequency_hopping(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """``mid - amp cos(phase)`` (mid 0.45-0.55, amp 0.3-0.43 ``peak``, from the low point), the
     phase advancing at a frequency hopping among 4-6 log-spaced values in 0.05-2 Hz, 2-5 cycles
     (and at least 2 s) at each, the next frequency another one of the set."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     if t.size == 0:
         return t
     freqs = np.geomspace(float(rng.uniform(0.05, 0.1)), float(rng.uniform(1.0, 2.0)), int(rng.integers(4, 7)))
@@ -60,7 +58,7 @@ def crank_bellows(duration_s: float, dt_s: float, peak: float, rng: np.random.Ge
     travel ``(r (1 - cos th) + l - sqrt(l^2 - r^2 sin^2 th)) / 2r`` (rod ratio ``r / l`` 0.2-0.45),
     the crank at 0.15-1 Hz, bias 0.03-0.2 and lift 0.6-0.9 ``peak`` (at most to the top), all redrawn
     per block; the phase runs on across blocks."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.empty_like(t)
     start, theta0 = 0.0, 0.0
     while start < duration_s:
@@ -82,7 +80,7 @@ def bias_ladder(duration_s: float, dt_s: float, peak: float, rng: np.random.Gene
     """A sine of 0.08-0.16 ``peak`` riding on a mean that climbs 5-8 equal rungs from 0.15-0.25 to
     0.75-0.85 and back down, each held 4-10 s and reached over 0.5 s; the sine's frequency
     (0.3-1.2 Hz) redrawn per rung, its phase running on."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     knots_t, knots_m, freq = [0.0], [0.2], np.empty_like(t)
     now, amp = 0.0, float(rng.uniform(0.08, 0.16))
     while now < duration_s:
@@ -103,7 +101,7 @@ def lorenz_chaos(duration_s: float, dt_s: float, peak: float, rng: np.random.Gen
     """``0.5 + 0.45 x / 20`` (clipped to 0.02..1) of the Lorenz system (sigma 10, rho 28, beta
     8/3) run ``kappa`` (0.25-0.6) of its own time units per second, from a random point after a
     transient of 20 units."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     kappa = float(rng.uniform(0.25, 0.6))
 
     def lorenz(_: float, s: Array) -> Array:
@@ -123,7 +121,7 @@ def relaxation_oscillator(duration_s: float, dt_s: float, peak: float, rng: np.r
     """Fill towards the supply (1.0) through a restrictor (``tau_f`` 0.4-1.5 s) until the snap valve
     trips at ``hi`` (0.75-0.95), vent (``tau_v`` 0.3-1.0 s) until it resets at ``lo`` (0.05-0.3);
     ``hi``, ``lo`` and ``tau_f`` wander by +-10-20 % on 20-60 s sines (exact per sample)."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     hi0, lo0 = float(rng.uniform(0.75, 0.95)), float(rng.uniform(0.05, 0.3))
     tau_f0, tau_v = float(rng.uniform(0.4, 1.5)), float(rng.uniform(0.3, 1.0))
     wander = float(rng.uniform(0.1, 0.2))
@@ -174,6 +172,6 @@ def with_exhaust_shakedown(
     body = np.clip(BLIND10_PROTOCOLS[protocol](max(duration_s - lead_s, 0.0) + 1.0, dt_s, peak, rng), 0.0, peak)
     knots_t.append(lead_s)
     knots_u.append(float(body[0]) / peak)
-    t = _t(lead_s, dt_s)
+    t = time_grid(lead_s, dt_s)
     lead = peak * np.interp(t, knots_t, knots_u)
     return np.asarray(np.concatenate([lead, body])[: int(round(duration_s / dt_s))], dtype=np.float64)

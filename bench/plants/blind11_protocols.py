@@ -28,13 +28,11 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from bench.plants.grids import time_grid
+
 Array = NDArray[np.float64]
 Protocol = Callable[[float, float, float, np.random.Generator], Array]
 GF3_PERIOD = 242  # 3^5 - 1: the register's characteristic polynomial x^5 + 2x + 1 is primitive over GF(3)
-
-
-def _t(duration_s: float, dt_s: float) -> Array:
-    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
 
 
 def ternary_sequence(n: int, seed_state: tuple[int, ...]) -> list[int]:
@@ -55,7 +53,7 @@ def ternary_ramps(duration_s: float, dt_s: float, peak: float, rng: np.random.Ge
     """Three levels (0.08-0.2, 0.42-0.58, 0.82-0.95 ``peak``) chosen by the ternary sequence, a clock
     period of 0.7-2.5 s redrawn every 12 symbols, each change a linear ramp over 15-60 % of the
     period (repeats hold)."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     levels = [float(rng.uniform(0.08, 0.2)), float(rng.uniform(0.42, 0.58)), float(rng.uniform(0.82, 0.95))]
     state = tuple(int(s) for s in rng.integers(0, 3, 5))
     if not any(state):
@@ -84,7 +82,7 @@ def ringdown_sum(duration_s: float, dt_s: float, peak: float, rng: np.random.Gen
     """A bias of 0.35-0.55 plus ring-downs struck at a Poisson rate (one per 1.5-4 s on average, the
     first within 1 s): each ``A e^(-t / tau) sin(2 pi f t)`` (A 0.15-0.4, f 0.3-2 Hz, tau 1.5-6 s,
     either sign); the bias wanders by +-0.1 over 30-80 s; clipped to 0..1."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     bias = float(rng.uniform(0.35, 0.55)) + 0.1 * np.sin(
         2.0 * np.pi * t / float(rng.uniform(30.0, 80.0)) + float(rng.uniform(0.0, 6.3))
     )
@@ -106,7 +104,7 @@ def matsuoka_cpg(duration_s: float, dt_s: float, peak: float, rng: np.random.Gen
     ``y_i = max(x_i, 0)`` (beta 2.5, w 2.5, tau_a / tau_r 5-8, tau_r 0.1-0.3 s: a 0.2-1.2 Hz rhythm),
     the tonic drive ``s`` stepped to 0.6-1.4 every 10-25 s; the output ``0.5 + g (y_1 - y_2) / s``
     (g 0.4-0.55) clipped to 0..1, integrated by semi-implicit Euler at <= 5 ms."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     tau_r = float(rng.uniform(0.1, 0.3))
     tau_a = tau_r * float(rng.uniform(5.0, 8.0))
     beta, w, gain = 2.5, 2.5, float(rng.uniform(0.4, 0.55))
@@ -138,7 +136,7 @@ def sit_to_stand(duration_s: float, dt_s: float, peak: float, rng: np.random.Gen
     a minimum-jerk settle to standing support (0.4-0.6) in 0.4-0.8 s held 2-6 s with sway (0.02-0.05
     at 0.2-0.5 Hz), then a controlled sit-down: up to 0.6-0.8 in 0.3 s and down to seated in
     1.2-2.5 s (minimum jerk)."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.empty_like(t)
     now, seated = 0.0, float(rng.uniform(0.03, 0.15))
     while now < duration_s:
@@ -172,7 +170,7 @@ def jonswap_swell(duration_s: float, dt_s: float, peak: float, rng: np.random.Ge
     """``0.5 + H(t) eta(t)``: ``eta`` a sum of 80 random-phase components over 0.5-4 ``f_p`` weighted
     by the JONSWAP spectrum (peak ``f_p`` 0.25-0.6 Hz, peak enhancement 2-5, normalised to unit
     standard deviation), ``H`` 0.17-0.24 breathing by +-30 % over 40-90 s; clipped to 0.02..1."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     f_p, gamma = float(rng.uniform(0.25, 0.6)), float(rng.uniform(2.0, 5.0))
     f = np.linspace(0.5 * f_p, 4.0 * f_p, 80)
     sigma = np.where(f <= f_p, 0.07, 0.09)

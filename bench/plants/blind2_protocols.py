@@ -20,6 +20,7 @@ from scipy.interpolate import PchipInterpolator
 from scipy.signal import lfilter
 
 from bench.plants.filters import resonance
+from bench.plants.grids import knotted, time_grid
 
 Array = NDArray[np.float64]
 Protocol = Callable[[float, float, float, np.random.Generator], Array]
@@ -28,15 +29,11 @@ RISE_S, HOLD_S, FALL_S = 1.2, 0.5, 1.2
 LEAD_IN_S = VENTED_S + RISE_S + HOLD_S + FALL_S
 
 
-def _t(duration_s: float, dt_s: float) -> Array:
-    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
-
-
 def gait_cycle(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """Walking bouts of 8-25 strides (stride 1.2-2.4 s, drawn per bout, +-5 % per stride): a
     loading-response bump (0.3-0.6 ``peak`` at 10-20 % of the stride) and a swing-assist peak
     (0.7-1 ``peak`` at 60-75 %), on a 0.05-0.15 ``peak`` floor; standing pauses of 3-10 s."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.empty_like(t)
     start, floor = 0.0, float(rng.uniform(0.05, 0.15))
     while start < duration_s:
@@ -60,7 +57,7 @@ def gait_cycle(duration_s: float, dt_s: float, peak: float, rng: np.random.Gener
 def am_sine(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """A 0.1-0.6 Hz carrier around 0.45-0.55 ``peak`` whose amplitude is modulated by a
     0.01-0.04 Hz sine (depth 0.4-0.9), so the loops breathe between small and large."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     centre = float(rng.uniform(0.45, 0.55))
     depth, fm = float(rng.uniform(0.4, 0.9)), float(rng.uniform(0.01, 0.04))
     envelope = 1.0 - depth * 0.5 * (1.0 + np.cos(2 * np.pi * fm * t + rng.uniform(0, 2 * np.pi)))
@@ -80,13 +77,13 @@ def sawtooth_train(duration_s: float, dt_s: float, peak: float, rng: np.random.G
         now = knots_t[-1]
         knots_t += [now + up, now + up + down, now + up + down + rest + 1e-3]
         knots_u += [top, base, base]
-    return np.asarray(np.interp(_t(duration_s, dt_s), knots_t, knots_u), dtype=np.float64)
+    return knotted(duration_s, dt_s, knots_t, knots_u)
 
 
 def setpoint_tracking(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """A pressure loop tracking a smooth setpoint (monotone cubic through random levels every
     4-15 s): its response is an underdamped 2nd-order one (0.5-1.5 Hz, damping 0.4-0.7)."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     knots_t, knots_u = [0.0], [float(rng.uniform(0.2, 0.8))]
     while knots_t[-1] < duration_s:
         knots_t.append(knots_t[-1] + float(rng.uniform(4.0, 15.0)))
@@ -100,7 +97,7 @@ def pwm_duty(duration_s: float, dt_s: float, peak: float, rng: np.random.Generat
     """The chamber pressure of an on/off valve pair switched at 2-5 Hz with a duty cycle that
     wanders slowly (random knots every 3-10 s in 0.05-0.95): fill and vent through a 0.1-0.3 s
     time constant, so the pressure ripples around a mean that follows the duty."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     knots_t, knots_d = [0.0], [float(rng.uniform(0.2, 0.8))]
     while knots_t[-1] < duration_s:
         knots_t.append(knots_t[-1] + float(rng.uniform(3.0, 10.0)))

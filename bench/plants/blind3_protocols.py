@@ -19,19 +19,17 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from bench.plants.grids import knotted, time_grid
+
 Array = NDArray[np.float64]
 Protocol = Callable[[float, float, float, np.random.Generator], Array]
-
-
-def _t(duration_s: float, dt_s: float) -> Array:
-    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
 
 
 def schroeder_offset(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """8-14 harmonics of a 0.04-0.08 Hz fundamental (amplitudes flat or falling as 1/sqrt(k)) with
     Schroeder phases ``phi_k = -pi k (k - 1) / K`` (crest factor ~1.5), scaled to +-0.25-0.35
     ``peak``, on an offset swinging 0.35-0.65 ``peak`` at 0.006-0.015 Hz."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     n_tones, f0 = int(rng.integers(8, 15)), float(rng.uniform(0.04, 0.08))
     k = np.arange(1, n_tones + 1, dtype=np.float64)
     amps = k ** -float(rng.choice([0.0, 0.5]))
@@ -58,7 +56,7 @@ def speed_ladder(duration_s: float, dt_s: float, peak: float, rng: np.random.Gen
                     dwell = float(rng.uniform(0.2, 1.0))
                     knots_t += [knots_t[-1] + ramp, knots_t[-1] + ramp + dwell]
                     knots_u += [level, level]
-    return np.asarray(np.interp(_t(duration_s, dt_s), knots_t, knots_u), dtype=np.float64)
+    return knotted(duration_s, dt_s, knots_t, knots_u)
 
 
 def stepped_sine(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
@@ -88,7 +86,7 @@ def dithered_triangles(duration_s: float, dt_s: float, peak: float, rng: np.rand
         for lo, hi in ((0.6, 0.97), (0.03, 0.3)):
             knots_t.append(knots_t[-1] + float(rng.uniform(4.0, 15.0)))
             knots_u.append(float(rng.uniform(lo, hi)) * peak)
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     dither = rng.uniform(0.02, 0.04) * peak * np.sin(2 * np.pi * rng.uniform(2.0, 5.0) * t)
     return np.asarray(np.interp(t, knots_t, knots_u) + dither, dtype=np.float64)
 
@@ -97,7 +95,7 @@ def min_jerk_reaching(duration_s: float, dt_s: float, peak: float, rng: np.rando
     """Point-to-point moves to random targets in 0.03-1 ``peak`` along minimum-jerk profiles
     ``10 s^3 - 15 s^4 + 6 s^5``; each move lasts ``a + b log2(1 + D / W)`` (Fitts' law, ``a``
     0.2-0.4 s, ``b`` 0.3-0.6 s, ``W`` 0.05 ``peak``), then a log-normal dwell (median 1.5 s)."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.empty_like(t)
     a, b = float(rng.uniform(0.2, 0.4)), float(rng.uniform(0.3, 0.6))
     now, level = 0.0, float(rng.uniform(0.03, 1.0))
@@ -133,5 +131,5 @@ def with_full_sweep(protocol: str, duration_s: float, dt_s: float, peak: float, 
     body = np.clip(BLIND3_PROTOCOLS[protocol](max(duration_s - lead_s, 0.0) + 1.0, dt_s, peak, rng), 0.0, peak)
     knots_t = np.array([0.0, vented, vented + rise, vented + rise + hold, vented + rise + hold + fall, lead_s])
     knots_u = np.array([0.0, 0.0, top, top, 0.0, float(body[0])])
-    lead = np.interp(_t(lead_s, dt_s), knots_t, knots_u)
+    lead = knotted(lead_s, dt_s, knots_t, knots_u)
     return np.asarray(np.concatenate([lead, body])[: int(round(duration_s / dt_s))], dtype=np.float64)

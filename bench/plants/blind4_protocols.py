@@ -22,19 +22,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bench.plants.filters import lowpass
+from bench.plants.grids import knotted, time_grid
 
 Array = NDArray[np.float64]
 Protocol = Callable[[float, float, float, np.random.Generator], Array]
 
 
-def _t(duration_s: float, dt_s: float) -> Array:
-    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
-
-
 def dual_chirp(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """Two linear chirps in 0.02-1.2 Hz, one sweeping up and one down over a 30-50 s sweep
     (then repeating), each +-0.18-0.25 ``peak`` around 0.5 ``peak`` (their beats reach the ends)."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     sweep = float(rng.uniform(30.0, 50.0))
     f_lo, f_hi = float(rng.uniform(0.02, 0.05)), float(rng.uniform(0.6, 1.2))
     s = t % sweep
@@ -50,7 +47,7 @@ def breathing_assist(duration_s: float, dt_s: float, peak: float, rng: np.random
     ``1 - exp(-t / tau)`` (tau 0.2-0.5 s) to a tidal pressure 0.5-0.9 ``peak``, a 0.2-0.5 s
     plateau, passive expiration ``exp(-t / tau_e)`` (0.3-0.8 s) to a PEEP of 0.03-0.1 ``peak``;
     every 6-10 breaths a sigh to 0.95-1 ``peak``."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.empty_like(t)
     now, n, sigh_every, peep = 0.0, 0, int(rng.integers(6, 11)), float(rng.uniform(0.03, 0.1))
     while now < duration_s:
@@ -81,7 +78,7 @@ def degauss_cycles(duration_s: float, dt_s: float, peak: float, rng: np.random.G
             knots_t += [knots_t[-1] + period / 4, knots_t[-1] + 3 * period / 4, knots_t[-1] + period]
             knots_u += [peak * (centre + amp), peak * (centre - amp), peak * centre]
             amp *= ratio
-    return np.asarray(np.interp(_t(duration_s, dt_s), knots_t, knots_u), dtype=np.float64)
+    return knotted(duration_s, dt_s, knots_t, knots_u)
 
 
 def levy_setpoints(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
@@ -95,7 +92,7 @@ def levy_setpoints(duration_s: float, dt_s: float, peak: float, rng: np.random.G
         x = 0.02 + (1.96 - y if y > 0.98 else y)
         knots_t.append(knots_t[-1] + float(np.clip(rng.exponential(2.5), 0.4, 10.0)))
         level.append(x)
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     idx = np.searchsorted(np.asarray(knots_t), t, side="right") - 1
     return lowpass(peak * np.asarray(level)[idx], dt_s, float(rng.uniform(0.15, 0.5)))
 
@@ -103,7 +100,7 @@ def levy_setpoints(duration_s: float, dt_s: float, peak: float, rng: np.random.G
 def coarse_dac_sine(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """A sine of 0.03-0.12 Hz (frequency drawn per cycle), 0.02-1 ``peak``, played through a
     4-bit DAC: 16 levels, so the pressure is a staircase with steps of 1/15 of the range."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     knots, phase, now = [0.0], [0.0], 0.0
     while now < duration_s:
         now += 1.0 / float(rng.uniform(0.03, 0.12))
@@ -139,7 +136,7 @@ def with_s_sweep(protocol: str, duration_s: float, dt_s: float, peak: float, rng
     down_at = vented + rise + hold
     lead_s = down_at + fall + 0.7
     body = np.clip(BLIND4_PROTOCOLS[protocol](max(duration_s - lead_s, 0.0) + 1.0, dt_s, peak, rng), 0.0, peak)
-    t = _t(lead_s, dt_s)
+    t = time_grid(lead_s, dt_s)
     lead = top * (_smoothstep((t - vented) / rise) - _smoothstep((t - down_at) / fall))
     ramp_in = np.clip((t - (lead_s - 0.4)) / 0.4, 0.0, 1.0)
     lead = lead + ramp_in * float(body[0])

@@ -24,17 +24,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bench.plants.filters import lowpass
+from bench.plants.grids import knotted, time_grid
 
 Array = NDArray[np.float64]
 Protocol = Callable[[float, float, float, np.random.Generator], Array]
-
-
-def _t(duration_s: float, dt_s: float) -> Array:
-    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
-
-
-def _knots(t: Array, knots_t: list[float], knots_u: list[float]) -> Array:
-    return np.asarray(np.interp(t, knots_t, knots_u), dtype=np.float64)
 
 
 def step_ladder(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
@@ -49,13 +42,13 @@ def step_ladder(duration_s: float, dt_s: float, peak: float, rng: np.random.Gene
             knots_t += [knots_t[-1] + float(rng.uniform(0.15, 0.4)), 0.0]
             knots_t[-1] = knots_t[-2] + float(rng.uniform(2.0, 10.0))
             knots_u += [peak * level, peak * level]
-    return _knots(_t(duration_s, dt_s), knots_t, knots_u)
+    return knotted(duration_s, dt_s, knots_t, knots_u)
 
 
 def riding_minor_loops(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """A triangle of period 20-45 s between 0.02-0.08 and 0.9-1 ``peak`` plus a sine of 0.3-1.2
     Hz and 6-14 % of ``peak`` (minor loops riding on the major one), clipped into 0..peak."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     period = float(rng.uniform(20.0, 45.0))
     lo, hi = float(rng.uniform(0.02, 0.08)), float(rng.uniform(0.9, 1.0))
     tri = 1.0 - np.abs(2.0 * ((t / period + 0.5) % 1.0) - 1.0)
@@ -68,7 +61,7 @@ def pedal_assist(duration_s: float, dt_s: float, peak: float, rng: np.random.Gen
     the revolution, vented for the rest; the cadence wanders (Ornstein-Uhlenbeck, 10 s, 8 rpm, around
     40-60 rpm, held in 30-75 rpm: rehabilitation cycling), the effort 0.45-1 ``peak`` is redrawn per revolution, and
     every 15-40 s the rider coasts 2-6 s (vented)."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     mean = float(rng.uniform(40.0, 60.0))
     a = float(np.exp(-dt_s / 10.0))
     kicks = rng.normal(0.0, 8.0 * np.sqrt(1.0 - a * a), t.size)
@@ -107,7 +100,7 @@ def gripper_cycles(duration_s: float, dt_s: float, peak: float, rng: np.random.G
             hold *= 0.5
         knots_t.append(knots_t[-1] + hold)
         level.append(0.0)
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     idx = np.searchsorted(np.asarray(knots_t), t, side="right") - 1
     return lowpass(peak * np.asarray(level)[idx], dt_s, float(rng.uniform(0.08, 0.25)))
 
@@ -123,7 +116,7 @@ def block_trapezoids(duration_s: float, dt_s: float, peak: float, rng: np.random
             now = knots_t[-1]
             knots_t += [now + ramp, now + ramp + top, now + 2 * ramp + top, now + 2 * ramp + top + bottom]
             knots_u += [peak * hi, peak * hi, peak * lo, peak * lo]
-    return _knots(_t(duration_s, dt_s), knots_t, knots_u)
+    return knotted(duration_s, dt_s, knots_t, knots_u)
 
 
 BLIND5_PROTOCOLS: dict[str, Protocol] = {
@@ -150,7 +143,7 @@ def with_valve_sweep(protocol: str, duration_s: float, dt_s: float, peak: float,
     vent_at = vented + fill + hold
     lead_s = vent_at + vent + 0.7
     body = np.clip(BLIND5_PROTOCOLS[protocol](max(duration_s - lead_s, 0.0) + 1.0, dt_s, peak, rng), 0.0, peak)
-    t = _t(lead_s, dt_s)
+    t = time_grid(lead_s, dt_s)
     filled = top * _charge(t - vented, fill)
     emptied = top * (1.0 - _charge(t - vent_at, vent))
     lead = np.where(t < vent_at, filled, emptied)

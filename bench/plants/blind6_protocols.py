@@ -27,20 +27,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bench.plants.filters import lowpass
+from bench.plants.grids import knotted, time_grid
 
 Array = NDArray[np.float64]
 Protocol = Callable[[float, float, float, np.random.Generator], Array]
-
-
-def _t(duration_s: float, dt_s: float) -> Array:
-    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
 
 
 def emg_envelope(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """Bursts of 1-4 s (rests 0.5-3 s) of white noise of a strength 0.4-1 per burst, rectified
     and smoothed by a 0.15-0.3 s envelope detector, scaled so that the strongest burst reaches
     ``peak``; a 1-3 % tonic activity stays between the bursts."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     strength = np.zeros_like(t)
     now = float(rng.uniform(0.2, 1.0))
     while now < duration_s:
@@ -58,7 +55,7 @@ def cardiac_assist(duration_s: float, dt_s: float, peak: float, rng: np.random.G
     """One systolic push per beat: a raised cosine of 30-40 % of the beat to 0.5-0.95 ``peak``
     (redrawn per beat, +-5 %), vented in diastole; the heart rate 60-100 bpm is modulated by
     breathing (+-3-8 bpm at 0.2-0.3 Hz); 3 % of the beats come 30 % early (ectopic)."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.zeros_like(t)
     hr, swing, breath = float(rng.uniform(60.0, 100.0)), float(rng.uniform(3.0, 8.0)), float(rng.uniform(0.2, 0.3))
     level, share = float(rng.uniform(0.5, 0.95)), float(rng.uniform(0.3, 0.4))
@@ -81,7 +78,7 @@ def joystick_teleop(duration_s: float, dt_s: float, peak: float, rng: np.random.
     like bell speed profile (a smoothstep of order 5), holds of 0.5-4 s with a physiological
     tremor (8-12 Hz, 0.3-1 % of ``peak``), and every 10-25 s the stick released to its spring
     centre (vented) for 1-3 s."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     knots_t, knots_u = [0.0], [0.0]
     release = float(rng.uniform(10.0, 25.0))
     while knots_t[-1] < duration_s:
@@ -111,7 +108,7 @@ def creep_recovery_blocks(duration_s: float, dt_s: float, peak: float, rng: np.r
             ramp, hold = float(rng.uniform(0.3, 1.0)), float(rng.uniform(6.0, 18.0))
             knots_t += [knots_t[-1] + ramp, knots_t[-1] + ramp + hold]
             knots_u += [peak * level, peak * level]
-    return np.asarray(np.interp(_t(duration_s, dt_s), knots_t, knots_u), dtype=np.float64)
+    return knotted(duration_s, dt_s, knots_t, knots_u)
 
 
 def rate_decade(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
@@ -126,7 +123,7 @@ def rate_decade(duration_s: float, dt_s: float, peak: float, rng: np.random.Gene
         for period in sweep.tolist():
             knots_t += [knots_t[-1] + 0.5 * period, knots_t[-1] + period]
             knots_u += [hi, lo]
-    return np.asarray(peak * np.interp(_t(duration_s, dt_s), knots_t, knots_u), dtype=np.float64)
+    return peak * knotted(duration_s, dt_s, knots_t, knots_u)
 
 
 BLIND6_PROTOCOLS: dict[str, Protocol] = {
@@ -147,7 +144,7 @@ def with_choked_sweep(protocol: str, duration_s: float, dt_s: float, peak: float
     vent_at = vented + fill + hold
     lead_s = vent_at + vent + 0.9
     body = np.clip(BLIND6_PROTOCOLS[protocol](max(duration_s - lead_s, 0.0) + 1.0, dt_s, peak, rng), 0.0, peak)
-    t = _t(lead_s, dt_s)
+    t = time_grid(lead_s, dt_s)
     s_fill = np.clip((t - vented) / fill, 0.0, 1.0)
     filled = top * (1.0 - (1.0 - s_fill) ** 2)
     emptied = top * np.clip(1.0 - (t - vent_at) / vent, 0.0, 1.0)

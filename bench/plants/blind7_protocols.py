@@ -28,13 +28,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bench.plants.filters import lowpass
+from bench.plants.grids import knotted, time_grid
 
 Array = NDArray[np.float64]
 Protocol = Callable[[float, float, float, np.random.Generator], Array]
-
-
-def _t(duration_s: float, dt_s: float) -> Array:
-    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
 
 
 def relay_autotune(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
@@ -42,7 +39,7 @@ def relay_autotune(duration_s: float, dt_s: float, peak: float, rng: np.random.G
     switching when a model of the stroke (a first-order lag of 0.3-1.2 s after a dead time of
     0.1-0.4 s, the loop's valve, hose and sensor) crosses ``c`` +- a hysteresis of 0.02-0.05
     ``peak``; ``c`` and ``d`` redrawn every 20-40 s; the valve's steps smoothed over 30 ms."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.empty_like(t)
     tau, eps = float(rng.uniform(0.3, 1.2)), float(rng.uniform(0.02, 0.05))
     keep = float(np.exp(-dt_s / tau))
@@ -69,7 +66,7 @@ def fatigue_reference_cycles(duration_s: float, dt_s: float, peak: float, rng: n
     """Blocks: a sine at 0.5-2 Hz between 0.2-0.4 and 0.6-0.85 ``peak`` for 15-30 s (starting at
     its low level), then a reference triangle 0.02 -> 1 -> 0.02 ``peak`` of 6-10 s."""
     knots_t, pieces = 0.0, []
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.zeros_like(t)
     while knots_t < duration_s:
         lo, hi, f = float(rng.uniform(0.2, 0.4)), float(rng.uniform(0.6, 0.85)), float(rng.uniform(0.5, 2.0))
@@ -91,7 +88,7 @@ def dma_amplitude_sweep(duration_s: float, dt_s: float, peak: float, rng: np.ran
     """A sine at 0.2-1 Hz about 0.45-0.55 ``peak`` whose amplitude steps up over 6-10 levels
     from 0.02-0.04 to 0.4-0.45 ``peak`` (log-spaced), 3-5 whole cycles per level, and back down;
     repeated with a new frequency."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.empty_like(t)
     start = 0.0
     while start < duration_s:
@@ -123,7 +120,7 @@ def cuff_step_deflation(duration_s: float, dt_s: float, peak: float, rng: np.ran
         knots_t += [knots_t[-1] + 0.5, 0.0]
         knots_t[-1] = knots_t[-2] + float(rng.uniform(2.0, 5.0))
         knots_u += [0.0, 0.0]
-    return np.asarray(peak * np.interp(_t(duration_s, dt_s), knots_t, knots_u), dtype=np.float64)
+    return peak * knotted(duration_s, dt_s, knots_t, knots_u)
 
 
 def iso230_bidirectional(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
@@ -140,7 +137,7 @@ def iso230_bidirectional(duration_s: float, dt_s: float, peak: float, rng: np.ra
             knots_u.append(level)
             knots_t.append(knots_t[-1] + float(rng.uniform(1.0, 3.0)))
             knots_u.append(level)
-    return np.asarray(peak * np.clip(np.interp(_t(duration_s, dt_s), knots_t, knots_u), 0.0, 1.0), dtype=np.float64)
+    return np.asarray(peak * np.clip(knotted(duration_s, dt_s, knots_t, knots_u), 0.0, 1.0), dtype=np.float64)
 
 
 BLIND7_PROTOCOLS: dict[str, Protocol] = {
@@ -161,7 +158,7 @@ def with_preconditioning(protocol: str, duration_s: float, dt_s: float, peak: fl
     top = float(rng.uniform(0.97, 1.0)) * peak
     lead_s = vented + sum(cycles) + 0.8
     body = np.clip(BLIND7_PROTOCOLS[protocol](max(duration_s - lead_s, 0.0) + 1.0, dt_s, peak, rng), 0.0, peak)
-    t = _t(lead_s, dt_s)
+    t = time_grid(lead_s, dt_s)
     lead = np.zeros_like(t)
     start = vented
     for length in cycles:

@@ -26,17 +26,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bench.plants.filters import lowpass
+from bench.plants.grids import knotted, time_grid
 
 Array = NDArray[np.float64]
 Protocol = Callable[[float, float, float, np.random.Generator], Array]
 
 
-def _t(duration_s: float, dt_s: float) -> Array:
-    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
-
-
 def _knots(duration_s: float, dt_s: float, peak: float, knots_t: list[float], knots_u: list[float]) -> Array:
-    return np.asarray(peak * np.clip(np.interp(_t(duration_s, dt_s), knots_t, knots_u), 0.0, 1.0), dtype=np.float64)
+    return np.asarray(peak * np.clip(knotted(duration_s, dt_s, knots_t, knots_u), 0.0, 1.0), dtype=np.float64)
 
 
 def atc24_incremental(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
@@ -61,7 +58,7 @@ def atc24_incremental(duration_s: float, dt_s: float, peak: float, rng: np.rando
 def sine_on_random(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """``0.5 + r(t) + a sin(2 pi f t)`` ``peak``: ``r`` white noise through two lags (0.3-1 s)
     scaled to 0.12-0.2 RMS, a sine of 2-6 Hz and 0.03-0.07 ``peak``; clipped to 0.02..1."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     tau = float(rng.uniform(0.3, 1.0))
     noise = lowpass(lowpass(rng.normal(0.0, 1.0, t.size), dt_s, tau), dt_s, tau)
     noise = noise - float(np.mean(noise))
@@ -75,7 +72,7 @@ def hand_pump_bleed(duration_s: float, dt_s: float, peak: float, rng: np.random.
     """Pump strokes every 0.8-1.6 s, each adding 0.06-0.12 ``peak`` in its first 0.3 s, up to a
     top of 0.7-1 ``peak``; held 2-5 s; bled through a needle valve (``exp(-t / tau)``, tau 3-8
     s) for 4-12 s; pumping resumes from where the bleed stopped."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.empty_like(t)
     now, level, i = 0.0, 0.03, 0
     while i < t.size:
@@ -125,7 +122,7 @@ def cycloidal_cam(duration_s: float, dt_s: float, peak: float, rng: np.random.Ge
     """Blocks of 3-6 cam cycles: a cycloidal rise ``s - sin(2 pi s) / (2 pi)`` from 0.05-0.25 to
     0.7-1 ``peak`` in 0.5-3 s, a dwell of 0.5-3 s, the same return, a dwell; the rise time,
     the dwells and the lift redrawn per block."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.empty_like(t)
     start = 0.0
     while start < duration_s:

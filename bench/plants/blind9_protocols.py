@@ -25,20 +25,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bench.plants.filters import lowpass, resonance, variable_delay
+from bench.plants.grids import time_grid
 
 Array = NDArray[np.float64]
 Protocol = Callable[[float, float, float, np.random.Generator], Array]
 LFSR_TAPS = {7: (7, 6), 8: (8, 6, 5, 4), 9: (9, 5)}
 
 
-def _t(duration_s: float, dt_s: float) -> Array:
-    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
-
-
 def endurance_blocks(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """Blocks of 8-20 cycles ``mid - amp cos(2 pi f t)`` (f 0.2-0.8 Hz, mid 0.4-0.6, amp 0.3-0.45
     ``peak``, from the block's low point), each followed by 2-6 s vented."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.zeros_like(t)
     start = 0.0
     while start < duration_s:
@@ -71,7 +68,7 @@ def prbs(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) 
     """A maximal-length sequence (order 7-9, clocked every 0.25-0.8 s) between a low level of
     0.05-0.35 and a high level of 0.65-1 ``peak``, both redrawn for each period of the sequence;
     the valve's command is switched, not ramped."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     order, clock = int(rng.integers(7, 10)), float(rng.uniform(0.25, 0.8))
     n_bits = int(t[-1] / clock) + 2 if t.size else 2
     bits = lfsr_bits(order, n_bits, int(rng.integers(0, 2**31)))
@@ -87,7 +84,7 @@ def overshoot_staircase(duration_s: float, dt_s: float, peak: float, rng: np.ran
     """Levels stepping up 4-7 times by 0.12-0.3 ``peak`` (to 0.95 at most) then down likewise
     (to a floor of 0.02-0.15), every 1.5-4 s, through a tuned loop's underdamped response (0.8-2
     Hz, damping 0.35-0.6: 10-30 % overshoot); clipped to 0..1."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     target = np.zeros_like(t)
     now, level = 0.0, 0.05
     while now < duration_s:
@@ -107,7 +104,7 @@ def human_tracking(duration_s: float, dt_s: float, peak: float, rng: np.random.G
     summing to 0.3-0.45 ``peak``) followed with a reaction delay of 0.15-0.3 s and a neuromuscular
     lag of 0.1-0.25 s, with 8-12 Hz tremor of 0.5-1.5 % ``peak`` and a corrective sub-movement
     (a 0.2-0.4 s bump of +-0.03-0.08) every 2-6 s; clipped to 0.02..1."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     freqs = np.sort(rng.uniform(0.03, 0.35, 3))
     amps = rng.dirichlet(np.ones(3)) * float(rng.uniform(0.3, 0.45))
     target = 0.5 + sum(a * np.sin(2.0 * np.pi * f * t + float(rng.uniform(0.0, 6.3))) for a, f in zip(amps, freqs))
@@ -129,7 +126,7 @@ def human_tracking(duration_s: float, dt_s: float, peak: float, rng: np.random.G
 def descending_sweep(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """Logarithmic sweeps ``0.5 - a cos(phase)`` (a 0.38-0.47 ``peak``) from 1.5-3 Hz down to
     0.02-0.05 Hz over 40-90 s, repeated with a new amplitude (each starts at its low point)."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.empty_like(t)
     start = 0.0
     while start < duration_s:
@@ -162,7 +159,7 @@ def with_shakedown(protocol: str, duration_s: float, dt_s: float, peak: float, r
     widths = rng.uniform(1.0, 1.4, 4)
     pulses_end = lead_in + float(np.sum(widths))
     lead_s = pulses_end + 0.4 + 0.5
-    t = _t(lead_s, dt_s)
+    t = time_grid(lead_s, dt_s)
     lead = np.zeros_like(t)
     start = lead_in
     for w in widths.tolist():

@@ -15,18 +15,12 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.signal import butter, sosfiltfilt
 
+from bench.plants.grids import knotted, time_grid
+
 Array = NDArray[np.float64]
 Protocol = Callable[[float, float, float, np.random.Generator], Array]
 VENTED_S = 2.0
 JOIN_S = 1.5
-
-
-def _t(duration_s: float, dt_s: float) -> Array:
-    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
-
-
-def _knots(t: Array, knots_t: list[float], knots_u: list[float]) -> Array:
-    return np.asarray(np.interp(t, knots_t, knots_u), dtype=np.float64)
 
 
 def staircase_random_holds(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
@@ -39,7 +33,7 @@ def staircase_random_holds(duration_s: float, dt_s: float, peak: float, rng: np.
         level = abs(level - 0.05) + 0.05 if level < 0.05 else 2.0 - level if level > 1.0 else level
         knots_t += [knots_t[-1] + hold, knots_t[-1] + hold + 0.15]
         knots_u += [knots_u[-1], float(np.clip(level, 0.05, 1.0)) * peak]
-    return _knots(_t(duration_s, dt_s), knots_t, knots_u)
+    return knotted(duration_s, dt_s, knots_t, knots_u)
 
 
 def reversing_ramps(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
@@ -55,13 +49,13 @@ def reversing_ramps(duration_s: float, dt_s: float, peak: float, rng: np.random.
         knots_t.append(knots_t[-1] + abs(target - here) / speed + 1e-3)
         knots_u.append(target * peak)
         up = not up
-    return _knots(_t(duration_s, dt_s), knots_t, knots_u)
+    return knotted(duration_s, dt_s, knots_t, knots_u)
 
 
 def band_noise(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """Gaussian noise low-passed at 0.2-1.5 Hz (4th-order Butterworth) on a mean wandering
     below 0.05 Hz, squeezed into 0.05-1 ``peak`` by a soft clip."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     fast = sosfiltfilt(butter(4, rng.uniform(0.2, 1.5), fs=1.0 / dt_s, output="sos"), rng.normal(size=t.size))
     slow = sosfiltfilt(butter(2, 0.05, fs=1.0 / dt_s, output="sos"), rng.normal(size=t.size))
     s = fast / (np.std(fast) or 1.0) * 0.15 + slow / (np.std(slow) or 1.0) * 0.12
@@ -71,7 +65,7 @@ def band_noise(duration_s: float, dt_s: float, peak: float, rng: np.random.Gener
 def spindle_bursts(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """Sine bursts (0.05-1 Hz) around a random centre whose amplitude grows to its maximum and
     decays again (a sin^2 envelope over 8-25 s), separated by 1-4 s at the centre."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.empty_like(t)
     start, previous = 0.0, 0.5 * peak
     while start < duration_s:
@@ -100,7 +94,7 @@ def trapezoids(duration_s: float, dt_s: float, peak: float, rng: np.random.Gener
         now = knots_t[-1]
         knots_t += [now + rise, now + rise + plateau, now + rise + plateau + fall, now + rise + plateau + fall + rest]
         knots_u += [top, top, new_base, new_base]
-    return _knots(_t(duration_s, dt_s), knots_t, knots_u)
+    return knotted(duration_s, dt_s, knots_t, knots_u)
 
 
 def forc_sweeps(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
@@ -114,7 +108,7 @@ def forc_sweeps(duration_s: float, dt_s: float, peak: float, rng: np.random.Gene
             down = (0.95 - level) / speed
             knots_t += [knots_t[-1] + down, knots_t[-1] + 2 * down]
             knots_u += [level * peak, 0.95 * peak]
-    return _knots(_t(duration_s, dt_s), knots_t, knots_u)
+    return knotted(duration_s, dt_s, knots_t, knots_u)
 
 
 def random_triangles(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
@@ -127,7 +121,7 @@ def random_triangles(duration_s: float, dt_s: float, peak: float, rng: np.random
             amp = float(rng.uniform(0.05, 0.45)) * min(centre, 1.0 - centre) / 0.45
             knots_t += [knots_t[-1] + period / 2, knots_t[-1] + period]
             knots_u += [(centre + amp) * peak, (centre - amp) * peak]
-    return _knots(_t(duration_s, dt_s), knots_t, knots_u)
+    return knotted(duration_s, dt_s, knots_t, knots_u)
 
 
 BLIND_PROTOCOLS: dict[str, Protocol] = {

@@ -11,18 +11,15 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from bench.plants.grids import time_grid
 from bench.plants.protocols import PROTOCOLS, Protocol
 
 Array = NDArray[np.float64]
 
 
-def _t(duration_s: float, dt_s: float) -> Array:
-    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
-
-
 def staircase_ramps(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """Random levels in 0.05-1 ``peak`` reached by ramps of 0.05-2 ``peak``/s, held 1-12 s."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     knots_t, knots_u = [0.0], [0.4 * peak]
     while knots_t[-1] < duration_s:
         target = float(rng.uniform(0.05, 1.0) * peak)
@@ -37,7 +34,7 @@ def staircase_ramps(duration_s: float, dt_s: float, peak: float, rng: np.random.
 def prbs_levels(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """PRBS-like: 3 random levels, switched at multiples of a 0.4-1.2 s clock (1-8 clocks held),
     each edge through a 0.1 s valve ramp."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     levels = np.sort(rng.uniform(0.1, 1.0, 3)) * peak
     levels[0], levels[-1] = min(levels[0], 0.25 * peak), max(levels[-1], 0.85 * peak)
     clock = float(rng.uniform(0.4, 1.2))
@@ -52,7 +49,7 @@ def prbs_levels(duration_s: float, dt_s: float, peak: float, rng: np.random.Gene
 
 def sine_bursts(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """Bursts of 0.1-2 Hz sines around a random level, decaying over 3-10 s, with 2-6 s rests."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.empty_like(t)
     start, level = 0.0, 0.5 * peak
     while start < duration_s:
@@ -80,7 +77,7 @@ FRESH_PROTOCOLS: dict[str, Protocol] = {
 
 def vented_full_cycle(protocol: str, duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> Array:
     """2 s vented, 0 -> peak in 5 s, peak -> 0 in 5 s, a 1 s ramp, then ``protocol`` [0..peak]."""
-    cond_t = _t(12.0, dt_s)
+    cond_t = time_grid(12.0, dt_s)
     cond = peak * np.clip(np.where(cond_t < 7.0, (cond_t - 2.0) / 5.0, 1.0 - (cond_t - 7.0) / 5.0), 0.0, 1.0)
     body = np.clip(FRESH_PROTOCOLS[protocol](duration_s - 13.0, dt_s, peak, rng), 0.0, peak)
     join = np.linspace(0.0, body[0], int(round(1.0 / dt_s)), endpoint=False)

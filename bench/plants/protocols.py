@@ -12,16 +12,14 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from bench.plants.grids import time_grid
+
 Protocol = Callable[[float, float, float, np.random.Generator], NDArray[np.float64]]
-
-
-def _t(duration_s: float, dt_s: float) -> NDArray[np.float64]:
-    return np.arange(int(round(duration_s / dt_s)), dtype=np.float64) * dt_s
 
 
 def multisine(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> NDArray[np.float64]:
     """Random-phase multisine, 12 log-spaced tones 0.02-1.0 Hz, scaled into 0.1..1 of ``peak``."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     freqs = np.geomspace(0.02, 1.0, 12)
     amps = 1.0 / np.sqrt(freqs / freqs[0])
     s = sum(a * np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi)) for a, f in zip(amps, freqs))
@@ -31,7 +29,7 @@ def multisine(duration_s: float, dt_s: float, peak: float, rng: np.random.Genera
 
 def steps(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> NDArray[np.float64]:
     """Steps to random levels (0.2-1 ramps of 0.3-1 s) with holds of 5-20 s."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     out = np.empty_like(t)
     level, start = float(0.5 * peak), 0.0
     while start < duration_s:
@@ -62,7 +60,7 @@ def growing_triangles(duration_s: float, dt_s: float, peak: float, rng: np.rando
 
 def chirp(duration_s: float, dt_s: float, peak: float, rng: np.random.Generator) -> NDArray[np.float64]:
     """Logarithmic chirp 0.02 -> 1.5 Hz and back, amplitude 0.3-0.45 of ``peak`` around 0.55 ``peak``."""
-    t = _t(duration_s, dt_s)
+    t = time_grid(duration_s, dt_s)
     half = duration_s / 2
     f0, f1 = 0.02, float(rng.uniform(0.8, 1.5))
     k = np.log(f1 / f0) / half
@@ -85,7 +83,7 @@ def with_conditioning(
     protocol: str, duration_s: float, dt_s: float, peak: float, rng: np.random.Generator
 ) -> NDArray[np.float64]:
     """0 -> peak -> 0.1 peak in 8 s, then ``protocol`` for the rest (joined by a 1 s ramp)."""
-    cond_t = _t(8.0, dt_s)
+    cond_t = time_grid(8.0, dt_s)
     cond = peak * np.where(cond_t < 4.0, cond_t / 4.0, 1.0 - 0.9 * (cond_t - 4.0) / 4.0)
     body = PROTOCOLS[protocol](duration_s - 9.0, dt_s, peak, rng)
     join = np.linspace(cond[-1], body[0], int(round(1.0 / dt_s)), endpoint=False)
