@@ -21,10 +21,10 @@ Measure = Callable[[Case], tuple[Measurement, dict[str, Any]]]
 Core = Callable[[NDArray[np.float64], float, dict[str, float]], NDArray[np.float64]]
 
 
-def assert_deterministic_by_seed(cases: list[Case], measure: Measure) -> None:
-    """Every 11th case recorded twice is the same record (output, input, columns, truth); the
-    next seed gives another."""
-    for case in cases[::11]:
+def assert_deterministic_by_seed(cases: list[Case], measure: Measure, stride: int = 11) -> None:
+    """Every ``stride``-th case recorded twice is the same record (output, input, columns,
+    truth); the next seed gives another."""
+    for case in cases[::stride]:
         a, ta = measure(case)
         b, tb = measure(case)
         assert np.array_equal(a.y, b.y) and np.array_equal(a.u, b.u) and str(ta) == str(tb)
