@@ -12,7 +12,7 @@ the model has it, and each core's loop (closed, 3-20 % wide, descending above as
 
 from __future__ import annotations
 
-from functools import cache, partial
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -35,8 +35,6 @@ from bench.plants.blind4_protocols import BLIND4_PROTOCOLS, with_s_sweep
 from bench.plants.blind4_rig import rig_reading, supply_droop
 from bench.plants.case import Case
 from bench.plants.properties import (
-    assert_closed_loop_3_to_20_percent_wide,
-    slow_and_fast_triangles,
     step_and_hold,
 )
 from bench.plants.visibility import rms
@@ -86,27 +84,6 @@ def test_creep_forms_keep_moving_in_a_hold_and_the_core_alone_settles(plant: str
         q = draw_effect_params("creep", form, rng)
         change = render(BLIND4_CORES[plant], params, u, dt, form, q, still, still + 22.0) - off
         assert change[i10] - change[i28] > 0.003 * span, form  # still lengthening 8-26 s after the step
-
-
-@pytest.mark.parametrize("plant", BLIND4_PLANTS)
-def test_rate_forms_grow_with_the_input_speed(plant: str) -> None:
-    rng = np.random.default_rng(6)
-    dt, peak = 0.005, 4.0
-    params = draw_params(plant, rng, peak)
-    for form in BLIND4_FORMS["rate_dependence"]:
-        q = draw_effect_params("rate_dependence", form, rng)
-        sizes = []
-        for u in slow_and_fast_triangles(peak, dt):
-            temps, loads = np.full_like(u, 22.0), np.zeros_like(u)
-            off = render(BLIND4_CORES[plant], params, u, dt, "none", q, loads, temps)
-            on = render(BLIND4_CORES[plant], params, u, dt, form, q, loads, temps)
-            sizes.append(rms(on - off))
-        assert sizes[1] > 3.0 * sizes[0], (form, sizes)
-
-
-@pytest.mark.parametrize("core", list(BLIND4_CORES))
-def test_core_draws_a_closed_loop_3_to_20_percent_wide_descending_above_ascending(core: str) -> None:
-    assert_closed_loop_3_to_20_percent_wide(BLIND4_CORES[core], partial(draw_params, core))
 
 
 def _excursion(dt: float, peak: float) -> np.ndarray:

@@ -64,5 +64,6 @@ SPEC = FamilySpec(
     intensity_key=INTENSITY_KEY,
     sensors={p: SENSORS for p in NOISE_MM},
     none_per_plant=NONE_PER_PLANT,
+    promises={"rate_growth": 3.0, "creep_sign": 1.0, "loop_cycles": 3, "loop_settled_share": 0.01},
     base=lambda r: None,
 )

@@ -69,4 +69,5 @@ SPEC = FamilySpec(
     intensity_key=INTENSITY_KEY,
     sensors={p: SENSORS for p in NOISE_MM},
     none_per_plant=NONE_PER_PLANT,
+    promises={"rate_growth": 3.0, "creep_sign": -1.0},
 )

@@ -66,7 +66,9 @@ SPEC = FamilySpec(
     intensity_key=INTENSITY_KEY,
     sensors={p: SENSORS for p in NOISE_MM},
     none_per_plant=NONE_PER_PLANT,
-    # its measurement noise is seeded at the same offset as blind2's (70 000)
-    tags=frozenset({"shares_seed_offset"}),
+    promises={"rate_growth": 3.0},
+    # its measurement noise is seeded at the same offset as blind2's (70 000); its creep is checked over the
+    # core without the supply droop by its own test (tests/test_blind4_family.py)
+    tags=frozenset({"shares_seed_offset", "check_creep_forms_keep_moving_in_a_hold"}),
     base=lambda r: r.core(supply_droop(r.u, r.dt, r.params), r.dt, r.params),
 )

@@ -102,6 +102,8 @@ SPEC = FamilySpec(
     intensity_key=INTENSITY_KEY,
     sensors=SENSORS,
     none_per_plant=NONE_PER_PLANT,
+    # its own creep test is the generic one and more (tests/test_blind6_family.py)
+    tags=frozenset({"check_creep_forms_keep_moving_in_a_hold"}),
     read=_read,
     recorded_input=lambda r: snubbed_reading(r.u, r.dt, r.params),
     calibration=Calibration(),

@@ -101,6 +101,9 @@ SPEC = FamilySpec(
     intensity_key=INTENSITY_KEY,
     sensors=SENSORS,
     none_per_plant=NONE_PER_PLANT,
+    # its creep (growing, then recovering) is checked by its own test (tests/test_blind8_forms.py), with its own
+    # rendering
+    tags=frozenset({"check_creep_forms_keep_moving_in_a_hold"}),
     read=_read,
     recorded_input=lambda r: recorded_pressure(r.u, r.dt, r.params),
     calibration=Calibration(),

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Callable, Iterable
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -20,7 +21,13 @@ import numpy as np
 from bench.plants import engine
 from bench.plants.case import Case
 from bench.plants.engine import LOAD_TEMP_EFFECTS, FamilySpec, Run
-from bench.plants.properties import assert_any_duration_builds, assert_deterministic_by_seed
+from bench.plants.properties import (
+    assert_any_duration_builds,
+    assert_closed_loop_3_to_20_percent_wide,
+    assert_deterministic_by_seed,
+    slow_and_fast_triangles,
+    step_and_hold,
+)
 from bench.plants.visibility import EFFECT_MAX_OVER_SPAN, EFFECT_MIN_OVER_NOISE, MAX_CALIBRATION, rms
 
 SPAN_MM = (8.0, 60.0)  # every family's effect-free stroke: a muscle's, not a sensor's
@@ -139,6 +146,74 @@ def check_record(spec: FamilySpec, case: Case, sim: dict[str, Any]) -> None:
         assert 1.0 / MAX_CALIBRATION - 1e-9 <= calibration <= MAX_CALIBRATION + 1e-9
 
 
+STILL_TEMPERATURE_C = 22.0  # the columns held still in the form checks: no load, room temperature
+
+
+def _still_run(spec: FamilySpec, plant: str, u: Any, dt: float, params: dict[str, float]) -> Run:
+    case = Case(plant, "none", "none", spec.protocols[0], 1.0 / dt, 0, u.size * dt)
+    run = Run(case, spec.cores[plant], dt, float(params.get("peak", np.max(u))), u, np.arange(u.size) * dt, params)
+    base = spec.base(run) if spec.base is not None else run.core(u, dt, params)
+    return Run(case, run.core, dt, run.peak, u, run.t, params, base)
+
+
+def _with_still_columns(spec: FamilySpec, run: Run, form: str, q: dict[str, float]) -> Any:
+    """``form`` rendered over its effect-free twin with no load and a still room temperature."""
+    assert spec.render is not None
+    load, temperature = np.zeros_like(run.u), np.full_like(run.u, STILL_TEMPERATURE_C)
+    off = spec.render(run, "none", dict(q), load, temperature, None)
+    return off, spec.render(run, form, q, load, temperature, off)
+
+
+def check_creep_forms_keep_moving_in_a_hold(spec: FamilySpec) -> None:
+    """After a step to 70 % of the peak held 28 s (:func:`bench.plants.properties.step_and_hold`),
+    each core settles (< 1 % of its span between 10 s and 28 s) and each creep form still moves
+    the output by more than 0.3 % of the span over that time (in the direction
+    ``promises["creep_sign"]`` where the family promises one)."""
+    assert spec.draw_effect is not None
+    for plant in spec.plants:
+        rng = np.random.default_rng(5)
+        dt, peak = 0.01, 4.0
+        params = spec.draw_params(plant, rng, peak)
+        run = _still_run(spec, plant, step_and_hold(peak, dt), dt, params)
+        off, _ = _with_still_columns(spec, run, "none", {})
+        span, i10, i28 = float(np.ptp(off)), int(10.0 / dt), int(28.0 / dt)
+        assert abs(off[i28] - off[i10]) < 0.01 * span, (plant, "the effect-free plant settles")
+        for form in spec.forms["creep"]:
+            off, on = _with_still_columns(spec, run, form, spec.draw_effect("creep", form, rng))
+            drift = (on - off)[i28] - (on - off)[i10]
+            sign = spec.promises.get("creep_sign", float(np.sign(drift)))  # +1: contracting further
+            assert sign * drift > 0.003 * span, (plant, form, drift / span)
+
+
+def check_rate_forms_grow_with_the_input_speed(spec: FamilySpec) -> None:
+    """Each rate form's size (RMS [mm] over its effect-free twin) on 4 s triangles is more than
+    ``promises["rate_growth"]`` (default 2) x its size on 40 s triangles."""
+    assert spec.draw_effect is not None
+    growth = spec.promises.get("rate_growth", 2.0)
+    for plant in spec.plants:
+        rng = np.random.default_rng(6)
+        dt, peak = 0.005, 4.0
+        params = spec.draw_params(plant, rng, peak)
+        for form in spec.forms["rate_dependence"]:
+            q = spec.draw_effect("rate_dependence", form, rng)
+            sizes = []
+            for u in slow_and_fast_triangles(peak, dt):
+                off, on = _with_still_columns(spec, _still_run(spec, plant, u, dt, params), form, q)
+                sizes.append(rms(on - off))
+            assert sizes[1] > growth * sizes[0], (plant, form, sizes)
+
+
+def check_core_draws_a_closed_loop(spec: FamilySpec) -> None:
+    """Each core, on slow triangles over three parameter draws, draws a closed loop (the last
+    cycle within ``promises["loop_settled_share"]``, default 2 %, of the one before; over
+    ``promises["loop_cycles"]``, default 4) of a 10-50 mm stroke, 3-20 % of it wide, the
+    descending branch above the ascending one."""
+    cycles = int(spec.promises.get("loop_cycles", 4))
+    settled = spec.promises.get("loop_settled_share", 0.02)
+    for plant, core in spec.cores.items():
+        assert_closed_loop_3_to_20_percent_wide(core, partial(spec.draw_params, plant), cycles, settled)
+
+
 def rerun(spec: FamilySpec, case: Case, sim: dict[str, Any]) -> Run:
     """The :class:`bench.plants.engine.Run` a simulation was rendered from, rebuilt from it."""
     params = sim["truth"]["plant_parameters"]
@@ -179,6 +254,9 @@ FAMILY_CHECKS: tuple[Callable[[FamilySpec], None], ...] = (
     check_deterministic_by_seed,
     check_any_duration_builds,
     check_protocols_start_vented_and_cover_the_range,
+    check_creep_forms_keep_moving_in_a_hold,
+    check_rate_forms_grow_with_the_input_speed,
+    check_core_draws_a_closed_loop,
 )
 RECORD_CHECKS: tuple[Callable[[FamilySpec, Case, dict[str, Any]], None], ...] = (
     check_record,

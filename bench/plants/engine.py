@@ -95,6 +95,7 @@ class FamilySpec:
     grow: float = 1.3  # how far past the band's floor a too-small effect is pushed
     none_per_plant: int = 5
     tags: frozenset[str] = frozenset()
+    promises: Mapping[str, float] = field(default_factory=dict)  # a contract check's bound, where stricter
     custom_cases: Callable[[float], list[Case]] | None = None  # a family the engine does not draw
     custom_record: Callable[[Case], Record] | None = None
 

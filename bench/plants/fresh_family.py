@@ -52,8 +52,9 @@ SPEC = FamilySpec(
     ),
     intensity_key=INTENSITY_KEY,
     none_per_plant=NONE_PER_PLANT,
-    # it reuses the tuning set's four protocols and two of its rates
-    tags=frozenset({"shares_protocols", "shares_rates"}),
+    # it reuses the tuning set's four protocols and two of its rates; its cores take the effects' hooks and have
+    # their own loop test (tests/test_fresh_plants.py)
+    tags=frozenset({"shares_protocols", "shares_rates", "check_core_draws_a_closed_loop"}),
     read=rounded_reading(10_000),  # measurement noise, independent of the plant draws
     base=lambda r: None,
     peak_bar=(2.5, 6.0),
