@@ -1,11 +1,9 @@
 """Properties of the fourth (blind2) held-out plant family; the diagnosis is never run here.
 
-Short records (40 s) keep the default run to a few CPU seconds. Checked: coverage (new cores,
-forms, protocols, rates, every protocol-rate pair), determinism by seed, finite quantised
-records, every effect visible (>= 5x noise) yet modest (<= 12 % of span), columns that move in
-every record and do nothing unless they are the effect (and do something when they are), the
-memory known early (full range in the first 15 %), delays that lag, creep that keeps moving
-in a hold, rate forms that grow with speed, and each core's loop (closed, 3-20 % wide).
+What every family promises (coverage, novelty, determinism, visibility, columns, memory, delays,
+durations, creep, rate growth, core loops) is checked once over every family by
+:mod:`tests.test_plant_contract`; here only this family's own: protocols start vented stay in
+range and excite.
 """
 
 from __future__ import annotations

@@ -1,13 +1,11 @@
 """Properties of the sixth (blind4) held-out plant family; the diagnosis is never run here.
 
-Short records (40 s) keep the default run to a few CPU seconds. Checked: coverage (new cores,
-forms, protocols, rates, column patterns, seeds; every protocol-rate pair; each form meets
-several protocols and rates), determinism by seed, finite quantised records, every effect
-visible (>= 5x noise) yet modest (<= 12 % of span), columns that move in every record and do
-nothing unless they are the effect (and do something when they are), the rig's confounds in
-effect-free records, the memory known early (full range in the first 15 %), delays that lag,
-creep that keeps moving in a hold, rate forms that grow with speed, return-point memory where
-the model has it, and each core's loop (closed, 3-20 % wide, descending above ascending).
+What every family promises (coverage, novelty, determinism, visibility, columns, memory, delays,
+durations, creep, rate growth, core loops) is checked once over every family by
+:mod:`tests.test_plant_contract`; here only this family's own: effect free records carry the rig
+confounds; creep forms keep moving in a hold and the core alone settles; masing and stoner cores
+have return point memory; protocols start vented sweep the range early and then keep covering
+it.
 """
 
 from __future__ import annotations

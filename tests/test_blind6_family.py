@@ -1,15 +1,11 @@
 """Properties of the eighth (blind6) held-out plant family; the diagnosis is never run here.
 
-Short records (60 s) keep the default run to a few CPU seconds. Checked: coverage (new cores,
-forms, protocols, rates, column patterns, seeds, noise seed offset; every protocol-rate pair;
-each form meets several protocols and rates), determinism by seed, finite quantised records
-with monotone time, every effect visible (>= 5x noise) yet modest (<= 12 % of span) and sizes
-spread over the band, columns that move in every record and do nothing unless they are the
-effect (and do something when they are), the rig's confounds in effect-free records, the memory
-known early, delays that lag (the pilot's longer for slow changes), creep that keeps moving in a
-hold, rate forms that grow with speed, the one-way damper lagging only the falling branch, the
-liner's temperature acting through the loop's width, and each core's loop (closed, 3-20 % wide,
-descending above ascending).
+What every family promises (coverage, novelty, determinism, visibility, columns, memory, delays,
+durations, creep, rate growth, core loops) is checked once over every family by
+:mod:`tests.test_plant_contract`; here only this family's own: effect free records carry the rig
+confounds; pilot dead time is longest for slow changes; creep forms keep moving in a hold and
+the core alone settles; one way damper lags only the falling branch; ptfe liner acts through the
+loop width; protocols start vented sweep the range early and then keep covering it.
 """
 
 from __future__ import annotations

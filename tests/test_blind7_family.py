@@ -1,17 +1,15 @@
 """Properties of the ninth (blind7) held-out plant family; the diagnosis is never run here.
 
-Short records (60 s) keep the default run to a few CPU seconds. Checked: coverage (new cores,
-forms, protocols, rates, column patterns, seeds, noise seed offset; every protocol-rate pair;
-each form meets several protocols and rates), determinism by seed, finite quantised records
-with monotone time, every effect visible (>= 5x noise) yet modest (<= 12 % of span) and sizes
-spread over the band, columns that move in every record and do nothing unless they are the
-effect (and do something when they are), the rig's confounds in effect-free records, the memory
-known early, delays that lag (the ranging sensor in held steps, the PTP delay wandering), creep
-that keeps moving in a hold (Andrade's recovering after a step down, the pull-out never coming
-back), rate forms that grow with speed (the fill not at all when slow, the brake capped at its
-hold), the foam's plateau and lag, the joint's slip band, the bumper acting only at the top, the
-bridge's temperature response fading when the temperature settles, and each core's loop
-(closed, 3-20 % wide, descending above ascending).
+What every family promises (coverage, novelty, determinism, visibility, columns, memory, delays,
+durations, creep, rate growth, core loops) is checked once over every family by
+:mod:`tests.test_plant_contract`; here only this family's own: effect free records carry the rig
+confounds; ranging sensor holds each ping and the ptp delay wanders; creep forms keep moving in
+a hold and the core alone settles; rate forms grow with the input speed; eddy brake lag is
+capped at its hold; foam pads sink more per kg in their plateau and after a lag; joint slips
+only past its band; bumper acts only at the top and the bridge fades when the temperature
+settles; ising crossings release in avalanches with return point memory; core draws a closed
+loop 3 to 20 percent wide descending above ascending; protocols start vented precondition early
+and then keep covering it.
 """
 
 from __future__ import annotations

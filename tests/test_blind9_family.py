@@ -1,13 +1,10 @@
 """Properties of the eleventh (blind9) held-out plant family; the diagnosis is never run here.
 
-Short records (40 s) keep the default run to a few CPU seconds. Checked: coverage (new cores,
-forms, protocols, rates, column patterns, seeds, noise seed offset; every protocol-rate pair;
-each form meets several protocols and rates), determinism by seed, finite quantised records
-with monotone time, every effect visible (>= 5x noise) yet modest (<= 12 % of span) and sizes
-spread over the band, columns that move in every record and do nothing unless they are the
-effect (and do something when they are), the rig's confounds in effect-free records, the memory
-known early, delays that lag, any duration building, and the protocols' vented start and
-shakedown. Each form's and core's own physics: :mod:`tests.test_blind9_forms`.
+What every family promises (coverage, novelty, determinism, visibility, columns, memory, delays,
+durations, creep, rate growth, core loops) is checked once over every family by
+:mod:`tests.test_plant_contract`; here only this family's own: effect free records carry the rig
+confounds; protocols start vented shake down early and then keep covering it. Each form's and
+core's own physics: :mod:`tests.test_blind9_forms`.
 """
 
 from __future__ import annotations

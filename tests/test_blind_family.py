@@ -1,10 +1,11 @@
 """Properties of the blind held-out plant family (never the diagnosis's numbers; it is not run here).
 
-Short records (40 s) keep the default run to a few CPU seconds. Checked: coverage (new cores,
-forms, protocols and rates), determinism by seed, finite output, effect-free records identical
-to a separate effect-off render, every effect visible (>= 5x noise) yet modest (<= 12 % of span),
-delays that really lag, columns present and moving, temperature that cycles rather than rises
-with time; and each core for what a muscle does (closed, monotone, real loops).
+What every family promises (coverage, novelty, determinism, visibility, columns, memory, delays,
+durations, creep, rate growth, core loops) is checked once over every family by
+:mod:`tests.test_plant_contract`; here only this family's own: core draws a closed monotone loop
+with descending above ascending; protocols start vented stay in range and excite; full length
+cases keep their effects visible and modest; preisach memory matches a brute force plane of
+crisp relays; chamber air heats on filling and leaves a thermal tail.
 """
 
 from __future__ import annotations

@@ -1,10 +1,12 @@
 """Properties of the fresh held-out plant family (never the diagnosis's numbers).
 
-Short records (30 s) keep the default run to a few CPU seconds. The family is checked for what
-it promises: coverage, determinism, finite output, effect-free records with no effect, every
-effect visible (>= 4x noise) yet modest (<= 15 % of span) and pointing the physical way, columns
-that always move; and each core for the physics of a muscle (monotone ascending branches,
-closed periodic loops, real hysteresis, rate independence where claimed).
+What every family promises (coverage, novelty, determinism, visibility, columns, memory, delays,
+durations, creep, rate growth, core loops) is checked once over every family by
+:mod:`tests.test_plant_contract`; here only this family's own: core is a closed monotone
+hysteresis loop; rate independent cores draw the same loop at two slow speeds; mckibben balance
+holds and has a dead zone under load; protocols start vented and stay in range; viscous
+hysteresis state matters fast and fades slow; full length cases keep their effects visible and
+modest.
 """
 
 from __future__ import annotations

@@ -28,7 +28,7 @@ from bench.plants.families import FAMILIES
 DURATION_S = 20.0  # s: the shortest record every protocol of every family builds
 DECIMALS = 6  # of each column, in its own unit (s, bar, mm, kg, degC): far above a BLAS update's reach
 SIGNIFICANT = 6  # of every number in the truth
-DEFAULT_STRIDE = 10
+DEFAULT_STRIDE = 13
 CHECKSUMS = Path(__file__).resolve().parent / "data" / "plant_checksums.json"
 
 

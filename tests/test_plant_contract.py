@@ -50,8 +50,16 @@ def test_the_registry_finds_every_family_and_the_benches_see_the_same() -> None:
         assert cases_for(5.0) == engine.cases(spec, 5.0)
 
 
-@pytest.mark.parametrize("check", contract.FAMILY_CHECKS, ids=lambda c: c.__name__)
-@pytest.mark.parametrize("family", list(SPECS))
+def _family_checks() -> list[Any]:
+    """Every (family, check) pair; a pair the family tags ``slow:<check>`` runs under ``-m slow``."""
+    return [
+        pytest.param(name, check, marks=[pytest.mark.slow] if f"slow:{check.__name__}" in spec.tags else [])
+        for name, spec in SPECS.items()
+        for check in contract.FAMILY_CHECKS
+    ]
+
+
+@pytest.mark.parametrize(("family", "check"), _family_checks(), ids=lambda v: getattr(v, "__name__", v))
 def test_family_check(family: str, check: Callable[[Any], None]) -> None:
     _skip_unless_applies(check, family)
     check(SPECS[family])

@@ -118,6 +118,14 @@ SPEC = FamilySpec(
     intensity_key=INTENSITY_KEY,
     sensors=SENSORS,
     none_per_plant=NONE_PER_PLANT,
+    # the generic creep, rate and loop checks (new to it) run under -m slow
+    tags=frozenset(
+        {
+            "slow:check_creep_forms_keep_moving_in_a_hold",
+            "slow:check_rate_forms_grow_with_the_input_speed",
+            "slow:check_core_draws_a_closed_loop",
+        }
+    ),
     read=_read,
     recorded_input=lambda r: sensor_pressure(r.u, r.dt, r.params),
     calibration=Calibration(),

@@ -102,8 +102,14 @@ SPEC = FamilySpec(
     sensors=SENSORS,
     none_per_plant=NONE_PER_PLANT,
     # its creep (growing, then recovering) is checked by its own test (tests/test_blind8_forms.py), with its own
-    # rendering
-    tags=frozenset({"check_creep_forms_keep_moving_in_a_hold"}),
+    # rendering; the generic creep, rate and loop checks (new to it) run under -m slow
+    tags=frozenset(
+        {
+            "check_creep_forms_keep_moving_in_a_hold",
+            "slow:check_rate_forms_grow_with_the_input_speed",
+            "slow:check_core_draws_a_closed_loop",
+        }
+    ),
     read=_read,
     recorded_input=lambda r: recorded_pressure(r.u, r.dt, r.params),
     calibration=Calibration(),

@@ -107,9 +107,16 @@ SPEC = FamilySpec(
     draw_effect=draw_effect_params,
     render=plant_first(render),
     intensity_key=INTENSITY_KEY,
-    sensors={
-        p: Sensors(SEED_OFFSET, QUANT_MM[p], LOAD_NOISE_KG, LOAD_READ_KG, TEMP_NOISE_K, TEMP_READ_K) for p in NOISE_MM
-    },
+    sensors=SENSORS,
+    none_per_plant=NONE_PER_PLANT,
+    # the generic creep, rate and loop checks (new to it) run under -m slow
+    tags=frozenset(
+        {
+            "slow:check_creep_forms_keep_moving_in_a_hold",
+            "slow:check_rate_forms_grow_with_the_input_speed",
+            "slow:check_core_draws_a_closed_loop",
+        }
+    ),
     read=_read,
     recorded_input=lambda r: recorded_pressure(r.u, r.dt, r.params),
     calibration=Calibration(),

@@ -53,8 +53,17 @@ SPEC = FamilySpec(
     intensity_key=INTENSITY_KEY,
     none_per_plant=NONE_PER_PLANT,
     # it reuses the tuning set's four protocols and two of its rates; its cores take the effects' hooks and have
-    # their own loop test (tests/test_fresh_plants.py)
-    tags=frozenset({"shares_protocols", "shares_rates", "check_core_draws_a_closed_loop"}),
+    # their own loop test (tests/test_fresh_plants.py); its creep and rate checks (new to it, 6 CPU s) run under
+    # -m slow
+    tags=frozenset(
+        {
+            "shares_protocols",
+            "shares_rates",
+            "check_core_draws_a_closed_loop",
+            "slow:check_creep_forms_keep_moving_in_a_hold",
+            "slow:check_rate_forms_grow_with_the_input_speed",
+        }
+    ),
     read=rounded_reading(10_000),  # measurement noise, independent of the plant draws
     base=lambda r: None,
     peak_bar=(2.5, 6.0),
