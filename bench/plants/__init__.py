@@ -1,8 +1,10 @@
-"""A family of test plants for ``pmactl diagnose`` that is wider than the HIL.
+"""The plant corpus the diagnosis is scored on: thirteen families of synthetic muscle plants.
 
-Three hysteresis cores that share nothing with the HIL or with the diagnosis's own Preisach
-baseline (:mod:`bench.plants.cores`), four protocols (:mod:`bench.plants.protocols`), every
-effect in two functional forms (:mod:`bench.plants.effects`), and the HIL itself through
-``hil.record``. :mod:`bench.plants.family` builds a recording for a case and splits the cases
-into a tuning set and a held-out set, fixed before any tuning.
+Each family is its own physics (``<name>_cores``, ``<name>_effects``, ``<name>_protocols`` and,
+for most, ``<name>_rig``) and one spec, ``SPEC`` in ``<name>_family.py``
+(:class:`bench.plants.engine.FamilySpec`); :mod:`bench.plants.engine` lists, simulates and
+records the cases of any spec, :mod:`bench.plants.registry` finds the specs by scanning, and
+:mod:`bench.plants.contract` holds the promises every family keeps. A new family is its physics
+modules plus a spec here; ``tests/test_plant_contract.py`` checks it with no new test module.
+Nothing under ``edge/`` or ``host/`` imports this package, and it knows nothing of the diagnosis.
 """
