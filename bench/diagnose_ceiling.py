@@ -43,13 +43,13 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from bench.plants.families import FAMILIES, family_names  # noqa: E402
+from bench.plants.family import Case  # noqa: E402
 from edge.errors import DataError  # noqa: E402
 from host.diagnose.candidates import baseline, with_columns  # noqa: E402
 from host.diagnose.decide import against_baseline, floor_for  # noqa: E402
 from host.diagnose.folds import BLOCKS_PER_FOLD, holdout_masks, noise_floor  # noqa: E402
 from host.diagnose.run import diagnose, finite_or_null, held_out_score  # noqa: E402
-from tests.plants.families import FAMILIES, family_names  # noqa: E402
-from tests.plants.family import Case  # noqa: E402
 
 FOLDS = 4
 # family -> the function that lists its cases; each family's module has simulate() and measurement_from()

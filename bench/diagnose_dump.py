@@ -35,8 +35,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from bench.diagnose_scorecard import diagnosed  # noqa: E402
-from tests.plants.families import FAMILIES, family_names  # noqa: E402
-from tests.plants.family import Case  # noqa: E402
+from bench.plants.families import FAMILIES, family_names  # noqa: E402
+from bench.plants.family import Case  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from diagnose_replay import DumpError, Line, read_dump  # noqa: E402

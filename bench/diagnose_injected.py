@@ -24,7 +24,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from tests.plants.injected_real import InjectedCase, injected_cases, injected_measurement  # noqa: E402
+from bench.plants.injected_real import InjectedCase, injected_cases, injected_measurement  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 

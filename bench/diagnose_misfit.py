@@ -31,12 +31,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from bench.plants.families import FAMILIES, family_names  # noqa: E402
+from bench.plants.family import Case  # noqa: E402
 from host.diagnose.features import actuator_input, preisach_rows  # noqa: E402
 from host.diagnose.folds import noise_floor  # noqa: E402
 from host.diagnose.hammerstein import fit_hammerstein, rmse  # noqa: E402
 from host.diagnose.run import PREISACH_LEVELS, choose_actuator_lag, decimated, known_memory, prepare  # noqa: E402
-from tests.plants.families import FAMILIES, family_names  # noqa: E402
-from tests.plants.family import Case  # noqa: E402
 
 
 def misfit(job: tuple[str, Case, tuple[int, ...]]) -> dict[str, Any]:

@@ -27,8 +27,8 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from bench.plants.families import FAMILIES  # noqa: E402
 from host.diagnose.decide import DecisionInputs, drift_would_be_named  # noqa: E402
-from tests.plants.families import FAMILIES  # noqa: E402
 
 Line = dict[str, Any]
 KEYS = ("family", "index", "case", "effect", "verdict")

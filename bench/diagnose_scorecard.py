@@ -40,11 +40,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from bench.plants.families import FAMILIES  # noqa: E402
+from bench.plants.family import Case  # noqa: E402
 from edge.errors import DataError  # noqa: E402
 from host.data import Measurement  # noqa: E402
 from host.diagnose.run import diagnose  # noqa: E402
-from tests.plants.families import FAMILIES  # noqa: E402
-from tests.plants.family import Case  # noqa: E402
 
 SETS = FAMILIES
 

@@ -29,8 +29,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from bench.diagnose_scorecard import SETS, diagnosed  # noqa: E402
-from tests.plants.families import family_names  # noqa: E402
-from tests.plants.family import Case  # noqa: E402
+from bench.plants.families import family_names  # noqa: E402
+from bench.plants.family import Case  # noqa: E402
 
 
 def verdicts(job: tuple[str, Case, tuple[float, ...], bool]) -> dict[str, object]:

@@ -17,7 +17,7 @@ from functools import partial
 import numpy as np
 import pytest
 
-from tests.plants.blind10_cores import (
+from bench.plants.blind10_cores import (
     BLIND10_CORES,
     BLIND10_DRIVES,
     bladder_n,
@@ -30,7 +30,7 @@ from tests.plants.blind10_cores import (
     static_stroke,
     stiffness_n_mm,
 )
-from tests.plants.blind10_effects import (
+from bench.plants.blind10_effects import (
     BLIND10_FORMS,
     INSIDE_FORMS,
     PLAIN_FORMS,
@@ -41,15 +41,15 @@ from tests.plants.blind10_effects import (
     plc_reading,
     render,
 )
-from tests.plants.blind10_family import BLIND10_PLANTS
-from tests.plants.blind10_rig import booster, held, hx711_load, ntc_celsius, ntc_counts, stroke_reading
-from tests.plants.filters import lowpass
-from tests.plants.properties import (
+from bench.plants.blind10_family import BLIND10_PLANTS
+from bench.plants.blind10_rig import booster, held, hx711_load, ntc_celsius, ntc_counts, stroke_reading
+from bench.plants.filters import lowpass
+from bench.plants.properties import (
     assert_closed_loop_3_to_20_percent_wide,
     step_and_hold,
     triangles,
 )
-from tests.plants.visibility import rms
+from bench.plants.visibility import rms
 
 STILL_TEMP_C = 22.0
 

@@ -22,7 +22,7 @@ from functools import partial
 import numpy as np
 import pytest
 
-from tests.plants.blind11_cores import (
+from bench.plants.blind11_cores import (
     BLIND11_CORES,
     BLIND11_DRIVES,
     RUNIN_PLAYS,
@@ -38,7 +38,7 @@ from tests.plants.blind11_cores import (
     spring_k1,
     static_stroke,
 )
-from tests.plants.blind11_effects import (
+from bench.plants.blind11_effects import (
     BLIND11_FORMS,
     INSIDE_FORMS,
     PLAIN_FORMS,
@@ -53,7 +53,7 @@ from tests.plants.blind11_effects import (
     prony_maxwell,
     render,
 )
-from tests.plants.blind11_rig import (
+from bench.plants.blind11_rig import (
     boxcar,
     load_reading,
     regulator_pressure,
@@ -62,9 +62,9 @@ from tests.plants.blind11_rig import (
     thermocouple_reading,
     triangulation_error,
 )
-from tests.plants.filters import resonance
-from tests.plants.properties import assert_closed_loop_3_to_20_percent_wide, step_and_hold, triangles
-from tests.plants.visibility import rms
+from bench.plants.filters import resonance
+from bench.plants.properties import assert_closed_loop_3_to_20_percent_wide, step_and_hold, triangles
+from bench.plants.visibility import rms
 
 STILL_TEMP_C = 22.0
 

@@ -17,7 +17,7 @@ from functools import partial
 import numpy as np
 import pytest
 
-from tests.plants.blind8_cores import (
+from bench.plants.blind8_cores import (
     BLIND8_CORES,
     dafalias_popov_friction,
     draw_params,
@@ -25,7 +25,7 @@ from tests.plants.blind8_cores import (
     ivshin_pence_crystallinity,
     mindlin_friction,
 )
-from tests.plants.blind8_effects import (
+from bench.plants.blind8_effects import (
     BLIND8_FORMS,
     air_dashpot_lag,
     belleville_deflection,
@@ -36,14 +36,14 @@ from tests.plants.blind8_effects import (
     sheath_compression,
     uart_stream,
 )
-from tests.plants.blind8_family import BLIND8_PLANTS, BLIND8_RATES_HZ
-from tests.plants.blind8_rig import anti_alias, sar_bit_error
-from tests.plants.properties import (
+from bench.plants.blind8_family import BLIND8_PLANTS, BLIND8_RATES_HZ
+from bench.plants.blind8_rig import anti_alias, sar_bit_error
+from bench.plants.properties import (
     assert_closed_loop_3_to_20_percent_wide,
     slow_and_fast_triangles,
     step_and_hold,
 )
-from tests.plants.visibility import rms
+from bench.plants.visibility import rms
 
 STILL_TEMP_C = 22.0
 

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 from scipy.special import erfcx
 
-from tests.plants.blind9_cores import (
+from bench.plants.blind9_cores import (
     BLIND9_CORES,
     BLIND9_DRIVES,
     breakaway_force,
@@ -31,7 +31,7 @@ from tests.plants.blind9_cores import (
     static_stroke,
     stiffness_n_mm,
 )
-from tests.plants.blind9_effects import (
+from bench.plants.blind9_effects import (
     BLIND9_FORMS,
     INSIDE_FORMS,
     bergstrom_boyce_force,
@@ -44,8 +44,8 @@ from tests.plants.blind9_effects import (
     render,
     stiffened_payload,
 )
-from tests.plants.blind9_family import BLIND9_PLANTS
-from tests.plants.blind9_rig import (
+from bench.plants.blind9_family import BLIND9_PLANTS
+from bench.plants.blind9_rig import (
     carrier_ripple,
     duty,
     manifold_pressure,
@@ -55,12 +55,12 @@ from tests.plants.blind9_rig import (
     stroke_reading,
     wire_wound,
 )
-from tests.plants.properties import (
+from bench.plants.properties import (
     assert_closed_loop_3_to_20_percent_wide,
     slow_and_fast_triangles,
     step_and_hold,
 )
-from tests.plants.visibility import rms
+from bench.plants.visibility import rms
 
 STILL_TEMP_C = 22.0
 

@@ -1,118 +1,38 @@
 """Properties of the blind held-out plant family (never the diagnosis's numbers; it is not run here).
 
-Short records (40 s) keep the default run to a few CPU seconds. Checked: coverage (new cores,
-forms, protocols and rates), determinism by seed, finite output, effect-free records identical
-to a separate effect-off render, every effect visible (>= 5x noise) yet modest (<= 12 % of span),
-delays that really lag, columns present and moving, temperature that cycles rather than rises
-with time; and each core for what a muscle does (closed, monotone, real loops).
+What every family promises (coverage, novelty, determinism, visibility, columns, memory, delays,
+durations, creep, rate growth, core loops) is checked once over every family by
+:mod:`tests.test_plant_contract`; here only this family's own: core draws a closed monotone loop
+with descending above ascending; protocols start vented stay in range and excite; full length
+cases keep their effects visible and modest; preisach memory matches a brute force plane of
+crisp relays; chamber air heats on filling and leaves a thermal tail.
 """
 
 from __future__ import annotations
 
-from collections import Counter
 from functools import cache
 from typing import Any
 
 import numpy as np
 import pytest
 
-from tests.plants import effects, family, fresh_effects, fresh_family, fresh_protocols
-from tests.plants.blind_cores import BLIND_CORES, Hooks
-from tests.plants.blind_effects import BLIND_FORMS, render
-from tests.plants.blind_family import (
-    BLIND_PLANTS,
-    NONE_PER_PLANT,
-    blind_cases,
-    blind_measurement,
+from bench.plants import engine
+from bench.plants.blind_cores import BLIND_CORES, Hooks
+from bench.plants.blind_family import (
+    SPEC,
     draw_blind_params,
-    measurement_from,
-    simulate,
 )
-from tests.plants.blind_protocols import BLIND_PROTOCOLS, vented_start
-from tests.plants.visibility import EFFECT_MAX_OVER_SPAN, EFFECT_MIN_OVER_NOISE
+from bench.plants.blind_protocols import BLIND_PROTOCOLS, vented_start
+from bench.plants.case import Case
+from bench.plants.visibility import EFFECT_MAX_OVER_SPAN, EFFECT_MIN_OVER_NOISE
 
 DURATION_S = 40.0
-CASES = blind_cases(DURATION_S)
+CASES = engine.cases(SPEC, DURATION_S)
 
 
 @cache
-def _simulated(case: family.Case) -> dict[str, Any]:
-    return simulate(case)
-
-
-def test_cases_cover_every_new_form_on_every_new_core_with_new_protocols_and_rates() -> None:
-    older_plants = set(family.TUNING_PLANTS + family.SECOND_TUNING_PLANTS + fresh_family.FRESH_PLANTS)
-    assert len(BLIND_PLANTS) == 4 and not set(BLIND_PLANTS) & older_plants
-    older_forms = {f for forms in (*effects.FORMS.values(), *fresh_effects.FRESH_FORMS.values()) for f in forms}
-    assert BLIND_FORMS.keys() == fresh_effects.FRESH_FORMS.keys()
-    assert all(len(forms) == 2 and not set(forms) & older_forms for e, forms in BLIND_FORMS.items() if e != "none")
-    per = Counter((c.plant, c.effect, c.form) for c in CASES)
-    for plant in BLIND_PLANTS:
-        for effect, forms in BLIND_FORMS.items():
-            for form in forms:
-                assert per[(plant, effect, form)] == (NONE_PER_PLANT if effect == "none" else 1)
-    assert len(CASES) == 60 and len({c.seed for c in CASES}) == len(CASES)
-    assert {c.protocol for c in CASES} == set(BLIND_PROTOCOLS) and not set(BLIND_PROTOCOLS) & set(
-        fresh_protocols.FRESH_PROTOCOLS
-    )
-    rates = {c.rate_hz for c in CASES}
-    assert (
-        all(50.0 <= r <= 500.0 for r in rates)
-        and len(rates - set(family.RATES_HZ) - set(fresh_family.FRESH_RATES_HZ)) >= 3
-    )
-    assert len({(c.protocol, c.rate_hz) for c in CASES}) == len(BLIND_PROTOCOLS) * len(rates)
-
-
-@pytest.mark.parametrize("case", CASES, ids=lambda c: c.name)
-def test_case_is_finite_visible_modest_and_has_moving_columns(case: family.Case) -> None:
-    sim = _simulated(case)
-    m, truth = measurement_from(case, sim)
-    n = int(round(DURATION_S * case.rate_hz))
-    assert len(m) == m.u.size == m.y.size == n and np.all(np.isfinite(m.y)) and np.all(np.isfinite(m.u))
-    assert np.allclose(np.diff(m.t), 1.0 / case.rate_hz) and m.source == case.name
-    assert (truth["effect"], truth["form"]) == (case.effect, case.form)
-    assert set(m.extras) == {"load", "temperature"}
-    assert np.ptp(m.extras["load"]) >= 0.5 and np.ptp(m.extras["temperature"]) >= 1.0
-    assert np.array_equal(m.extras["load"], np.round(m.extras["load"], 3))
-    assert np.array_equal(m.extras["temperature"], np.round(m.extras["temperature"], 1))
-    assert 5.0 <= truth["span"] <= 50.0 and np.min(sim["off"]) > -0.5  # mm (40 s may not reach the top); rest length
-    assert np.all(m.u[: int(round(2.0 * case.rate_hz))] == 0.0) and 0.0 <= m.u.min() and m.u.max() <= 6.0
-    assert np.std(m.y - sim["on"]) == pytest.approx(truth["noise"], rel=0.1)
-    size = float(np.sqrt(np.mean((sim["on"] - sim["off"]) ** 2)))
-    assert size == pytest.approx(truth["effect_size"])
-    if case.effect == "none":
-        core, params = BLIND_CORES[case.plant], truth["plant_parameters"]
-        # the columns are decoys: the record is the same with them held still
-        still_load, still_temperature = np.full_like(sim["load"], 2.0), np.full_like(sim["temperature"], 22.0)
-        again = render(core, params, sim["u"], 1.0 / case.rate_hz, "none", {}, still_load, still_temperature, None)
-        assert size == 0.0 and np.array_equal(again, sim["on"])
-        return
-    assert EFFECT_MIN_OVER_NOISE * truth["noise"] <= size <= EFFECT_MAX_OVER_SPAN * truth["span"]
-    assert 0.25 <= truth["intensity_rescale"] <= 4.0
-    if case.effect == "load_dependence":
-        assert np.mean(sim["on"] - sim["off"]) < 0.0  # a payload never helps the muscle contract
-    if case.effect == "temperature_drift":
-        temp = sim["temperature"]
-        assert np.max(np.maximum.accumulate(temp) - temp) > 1.0 and np.ptp(temp) > 2.0  # it cools too
-
-
-def test_delay_forms_lag_the_effect_free_output() -> None:
-    for case in (c for c in CASES if c.effect == "transport_delay"):
-        sim = _simulated(case)
-        on, off = sim["on"], sim["off"]
-        lags = np.arange(0, int(0.5 * case.rate_hz))
-        misfit = [float(np.mean((on[k:] - off[: off.size - k]) ** 2)) for k in lags]
-        assert lags[int(np.argmin(misfit))] > 0, case.name
-
-
-def test_measurement_is_deterministic_by_seed() -> None:
-    for case in CASES[::11]:
-        a, ta = blind_measurement(case)
-        b, tb = blind_measurement(case)
-        assert np.array_equal(a.y, b.y) and np.array_equal(a.u, b.u) and ta == tb
-        assert np.array_equal(a.extras["temperature"], b.extras["temperature"])
-    other = family.Case(**{**CASES[0].__dict__, "seed": CASES[0].seed + 1})
-    assert not np.array_equal(blind_measurement(CASES[0])[0].y, blind_measurement(other)[0].y)
+def _simulated(case: Case) -> dict[str, Any]:
+    return engine.simulate(SPEC, case)
 
 
 @pytest.mark.parametrize("core", list(BLIND_CORES))
@@ -148,8 +68,10 @@ def test_protocols_start_vented_stay_in_range_and_excite(protocol: str) -> None:
 @pytest.mark.slow
 def test_full_length_cases_keep_their_effects_visible_and_modest() -> None:
     """The lead's records (150 s, the default): every effect in its band, every column moving."""
-    for case in blind_cases():
-        truth = simulate(case)["truth"]
+    for case in engine.cases(
+        SPEC,
+    ):
+        truth = engine.simulate(SPEC, case)["truth"]
         assert 10.0 <= truth["span"] <= 50.0, case.name
         if case.effect == "none":
             assert truth["effect_size"] == 0.0
@@ -160,7 +82,7 @@ def test_full_length_cases_keep_their_effects_visible_and_modest() -> None:
 
 def test_preisach_memory_matches_a_brute_force_plane_of_crisp_relays() -> None:
     """The Everett/wiping-out shortcut equals switching every relay of the same grid one by one."""
-    from tests.plants.blind_cores import _everett_tables, preisach_share
+    from bench.plants.blind_cores import _everett_tables, preisach_share
 
     rng = np.random.default_rng(3)
     params = draw_blind_params("preisach_resonant", rng, 4.0)
@@ -183,7 +105,7 @@ def test_preisach_memory_matches_a_brute_force_plane_of_crisp_relays() -> None:
 
 
 def test_chamber_air_heats_on_filling_and_leaves_a_thermal_tail() -> None:
-    from tests.plants.blind_cores import chamber_pressure
+    from bench.plants.blind_cores import chamber_pressure
 
     rng = np.random.default_rng(4)
     params = draw_blind_params("valve_chamber", rng, 4.0)

@@ -29,9 +29,9 @@ from dataclasses import dataclass
 
 import pytest
 
+from bench.plants.families import FAMILIES as REGISTRY
+from bench.plants.families import Cases, Record
 from host.diagnose.run import diagnose
-from tests.plants.families import FAMILIES as REGISTRY
-from tests.plants.families import Cases, Record
 
 
 @dataclass(frozen=True)

@@ -14,11 +14,11 @@ import warnings
 import numpy as np
 import pytest
 
+from bench.plants.pulses import muscle_stroke, pulse_pressure, pulse_record
 from host.data import Measurement
 from host.diagnose import run
 from host.diagnose.candidates import DELAY_RATIO, MIN_DELAY_SAMPLES, _lag_left, delay_grid
 from host.diagnose.features import first_order
-from tests.plants.pulses import muscle_stroke, pulse_pressure, pulse_record
 
 
 def _diagnosed(m: Measurement):

@@ -12,10 +12,10 @@ import warnings
 import numpy as np
 import pytest
 
+from bench.plants.pulses import muscle_stroke, pulse_pressure
 from host.data import Measurement
 from host.diagnose import run
 from host.diagnose.features import actuator_input, first_order
-from tests.plants.pulses import muscle_stroke, pulse_pressure
 
 SNUBBER_S = 0.009  # between the grid's 6 and 12 ms leads: the test is not an exact inversion
 

@@ -11,10 +11,10 @@ import warnings
 import numpy as np
 import pytest
 
+from bench.plants.pulses import muscle_stroke, pulse_pressure, pulse_record
 from host.data import Measurement
 from host.diagnose import run
 from host.diagnose.payload import payload_follow, stiffness_ratio
-from tests.plants.pulses import muscle_stroke, pulse_pressure, pulse_record
 
 
 def _damped_step(t: np.ndarray, w: float, zeta: float) -> np.ndarray:

@@ -1,111 +1,43 @@
 """Properties of the fresh held-out plant family (never the diagnosis's numbers).
 
-Short records (30 s) keep the default run to a few CPU seconds. The family is checked for what
-it promises: coverage, determinism, finite output, effect-free records with no effect, every
-effect visible (>= 4x noise) yet modest (<= 15 % of span) and pointing the physical way, columns
-that always move; and each core for the physics of a muscle (monotone ascending branches,
-closed periodic loops, real hysteresis, rate independence where claimed).
+What every family promises (coverage, novelty, determinism, visibility, columns, memory, delays,
+durations, creep, rate growth, core loops) is checked once over every family by
+:mod:`tests.test_plant_contract`; here only this family's own: core is a closed monotone
+hysteresis loop; rate independent cores draw the same loop at two slow speeds; mckibben balance
+holds and has a dead zone under load; protocols start vented and stay in range; viscous
+hysteresis state matters fast and fades slow; full length cases keep their effects visible and
+modest.
 """
 
 from __future__ import annotations
 
-from collections import Counter
 from functools import cache
 from typing import Any
 
 import numpy as np
 import pytest
 
-from tests.plants import family
-from tests.plants.fresh_cores import (
+from bench.plants import engine
+from bench.plants.case import Case
+from bench.plants.fresh_cores import (
     FRESH_CORES,
     RATE_INDEPENDENT,
     Hooks,
     draw_fresh_params,
     mckibben_contraction,
 )
-from tests.plants.fresh_effects import FRESH_FORMS
-from tests.plants.fresh_family import (
-    FRESH_PLANTS,
-    NONE_PER_PLANT,
-    fresh_cases,
-    fresh_measurement,
-    measurement_from,
-    simulate,
+from bench.plants.fresh_family import (
+    SPEC,
 )
-from tests.plants.fresh_protocols import FRESH_PROTOCOLS, vented_full_cycle
-from tests.plants.protocols import PROTOCOLS
+from bench.plants.fresh_protocols import FRESH_PROTOCOLS, vented_full_cycle
 
 DURATION_S = 30.0
-CASES = fresh_cases(DURATION_S)
+CASES = engine.cases(SPEC, DURATION_S)
 
 
 @cache
-def _simulated(case: family.Case) -> dict[str, Any]:
-    return simulate(case)
-
-
-def test_cases_cover_every_form_on_every_new_core_with_new_protocols_and_rates() -> None:
-    assert not set(FRESH_PLANTS) & set(family.TUNING_PLANTS + family.SECOND_TUNING_PLANTS)
-    assert len(FRESH_PLANTS) >= 3
-    per_plant = Counter((c.plant, c.effect, c.form) for c in CASES)
-    for plant in FRESH_PLANTS:
-        for effect, forms in FRESH_FORMS.items():
-            for form in forms:
-                assert per_plant[(plant, effect, form)] == (NONE_PER_PLANT if effect == "none" else 1)
-    for effect, forms in FRESH_FORMS.items():
-        assert effect == "none" or len(forms) >= 2
-    rates = {c.rate_hz for c in CASES}
-    assert rates - set(family.RATES_HZ) and all(50.0 <= r <= 500.0 for r in rates)
-    used = {c.protocol for c in CASES}
-    assert used == set(FRESH_PROTOCOLS) and used - set(PROTOCOLS)
-    assert len({c.seed for c in CASES}) == len(CASES)
-
-
-@pytest.mark.parametrize("case", CASES, ids=lambda c: c.name)
-def test_case_builds_with_a_visible_modest_effect_and_moving_columns(case: family.Case) -> None:
-    sim = _simulated(case)
-    m, truth = measurement_from(case, sim)
-    n = int(round(DURATION_S * case.rate_hz))
-    assert len(m) == n and m.u.size == m.y.size == n and np.all(np.isfinite(m.y))
-    assert np.allclose(np.diff(m.t), 1.0 / case.rate_hz)
-    assert m.source == case.name and truth["effect"] == case.effect and truth["form"] == case.form
-    assert 10.0 <= truth["span"] <= 50.0  # mm-like stroke
-    assert np.ptp(m.extras["load"]) >= 1.0 and np.ptp(m.extras["temperature"]) >= 0.5
-    vented = int(round(2.0 * case.rate_hz))
-    assert np.all(m.u[:vented] == 0.0) and m.u.max() == pytest.approx(sim["u"].max())
-    size = float(np.sqrt(np.mean((sim["on"] - sim["off"]) ** 2)))
-    assert size == pytest.approx(truth["effect_size"])
-    residual = m.y - sim["on"]
-    assert np.std(residual) == pytest.approx(truth["noise"], rel=0.1)
-    if case.effect == "none":
-        assert size == 0.0 and np.array_equal(sim["on"], sim["off"])
-        return
-    assert 4.0 * truth["noise"] <= size <= 0.15 * truth["span"]
-    shift = float(np.mean(sim["on"] - sim["off"]))
-    if case.effect == "load_dependence":
-        assert shift < 0.0  # a heavier load never helps the muscle contract
-    if case.effect == "creep" or case.form == "stiffness":
-        assert shift > 0.0  # creep keeps contracting; a warmer, softer bladder contracts further
-
-
-def test_effect_cases_lag_when_delayed() -> None:
-    for case in (c for c in CASES if c.effect == "transport_delay"):
-        sim = _simulated(case)
-        on, off = sim["on"], sim["off"]
-        lags = np.arange(0, int(0.5 * case.rate_hz))
-        misfit = [float(np.mean((on[k:] - off[: off.size - k]) ** 2)) for k in lags]
-        assert lags[int(np.argmin(misfit))] > 0, case.name  # the effect-free output, shifted later, fits best
-
-
-def test_measurement_is_deterministic_by_seed() -> None:
-    for case in CASES[::13]:
-        a, ta = fresh_measurement(case)
-        b, tb = fresh_measurement(case)
-        assert np.array_equal(a.y, b.y) and np.array_equal(a.extras["load"], b.extras["load"])
-        assert ta == tb
-    other = family.Case(**{**CASES[0].__dict__, "seed": CASES[0].seed + 1})
-    assert not np.array_equal(fresh_measurement(CASES[0])[0].y, fresh_measurement(other)[0].y)
+def _simulated(case: Case) -> dict[str, Any]:
+    return engine.simulate(SPEC, case)
 
 
 def _triangles(peak: float, period_s: float, cycles: int, dt_s: float) -> np.ndarray:
@@ -191,8 +123,10 @@ def test_viscous_hysteresis_state_matters_fast_and_fades_slow(core: str) -> None
 @pytest.mark.slow
 def test_full_length_cases_keep_their_effects_visible_and_modest() -> None:
     """The lead's records (150 s, the default): every effect still in its band, every column moving."""
-    for case in fresh_cases():
-        sim = simulate(case)
+    for case in engine.cases(
+        SPEC,
+    ):
+        sim = engine.simulate(SPEC, case)
         truth = sim["truth"]
         assert 10.0 <= truth["span"] <= 50.0, case.name
         assert np.ptp(sim["load"]) >= 1.0 and np.ptp(sim["temperature"]) >= 0.5, case.name

@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter
 
+from bench.plants.injected_real import FORMS, MAX_OVER_SPAN, MIN_OVER_NOISE, injected_cases, injected_measurement
+from bench.plants.real_records import BASES, PIEZO_BLOCK, native_record
 from host.data import Measurement, load_measurement
 from tests.conftest import REPO
-from tests.plants.injected_real import FORMS, MAX_OVER_SPAN, MIN_OVER_NOISE, injected_cases, injected_measurement
-from tests.plants.real_records import BASES, PIEZO_BLOCK, native_record
 
 Record = tuple[Measurement, dict[str, Any]]
 
