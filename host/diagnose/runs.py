@@ -65,6 +65,20 @@ def _decimate(m: Measurement, q: int) -> Measurement:
     return Measurement(m.t[:n:q].copy(), mean(m.u), mean(m.y), {k: mean(v) for k, v in m.extras.items()}, m.source)
 
 
+def _resampled(m: Measurement, dt: float) -> Measurement:
+    """``m`` on a uniform grid of step ``dt`` [s] from its first sample (linear interpolation)."""
+    if abs(m.dt - dt) <= 0.01 * dt:
+        return m
+    t = m.t[0] + np.arange(int(np.floor((m.t[-1] - m.t[0]) / dt)) + 1) * dt
+    return Measurement(
+        t,
+        np.interp(t, m.t, m.u),
+        np.interp(t, m.t, m.y),
+        {k: np.interp(t, m.t, v) for k, v in m.extras.items()},
+        m.source,
+    )
+
+
 def run_set(runs: list[Measurement], max_rows: int, min_samples: int) -> RunSet:
     """The runs as one :class:`RunSet`, decimated (block means) when together they exceed
     ``max_rows``. A column is kept only when every run has it. Bad input: one :class:`DataError`."""
@@ -82,12 +96,13 @@ def run_set(runs: list[Measurement], max_rows: int, min_samples: int) -> RunSet:
         )
         runs = [_decimate(m, q) for m in runs]
     dts = np.array([m.dt for m in runs])
-    dt = float(np.median(dts))
-    if np.any(np.abs(dts - dt) > 0.25 * dt):
-        odd = [f"{m.source} ({1 / m.dt:.3g} Hz)" for m in runs if abs(m.dt - dt) > 0.25 * dt]
-        raise DataError(
-            f"runs sampled at different rates: {', '.join(odd[:3])} vs {1 / dt:.3g} Hz; resample them to one rate"
+    dt = float(dts.max())
+    if np.any(np.abs(dts - dt) > 0.01 * dt):
+        notes.append(
+            f"runs sampled at {1 / dts.max():.3g}-{1 / dts.min():.3g} Hz were resampled (linear interpolation) to the "
+            f"slowest rate, {1 / dt:.3g} Hz, so that one noise model and one set of lags fits them all"
         )
+        runs = [_resampled(m, dt) for m in runs]
     present = [c for c in COLUMNS if all(c in m.extras for m in runs)]
     missing = [c for c in COLUMNS if any(c in m.extras for m in runs) and c not in present]
     for c in missing:
