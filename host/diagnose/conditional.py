@@ -27,6 +27,7 @@ from scipy.stats import chi2, ncx2
 from host.diagnose.nuisance import Baseline, ar_whitener, kept_rows, whiten
 from host.diagnose.rules import CAUSES, Rules
 from host.diagnose.runs import RunSet
+from host.diagnose.strata import state_strata, within_strata_permutations
 
 Matrix = NDArray[np.float64]
 
@@ -159,7 +160,11 @@ def group_tests(
     level_dynamic = rules.alpha * len(dynamic) / len(names)
     level_column = rules.alpha / len(names)
     p_u, p_m = _max_t(w, dynamic, marginal, unique, t_m, t_u, rules, rng)
-    nulls = {g: f"block bootstrap max-T over {len(dynamic)} groups ({rules.bootstrap_draws} draws)" for g in dynamic}
+    nulls = {
+        g: f"max-T over {len(dynamic)} groups: block bootstrap and within-state permutations "
+        f"({rules.bootstrap_draws} each)"
+        for g in dynamic
+    }
     for g in columns:
         raw = float(chi2.sf(t_u[g], max(unique[g].shape[1], 1)))
         p_u[g], p_m[g] = (raw, float(chi2.sf(t_m[g], max(marginal[g].shape[1], 1))))
@@ -197,16 +202,42 @@ def _max_t(
     rules: Rules,
     rng: np.random.Generator,
 ) -> tuple[dict[str, float], dict[str, float]]:
-    """Single-step max-T adjusted p-values of the dynamic groups, unique and marginal."""
+    """Single-step max-T adjusted p-values of the dynamic groups, unique and marginal: the larger
+    of the block bootstrap's (noise as the null) and the within-state permutation's (the
+    rate-independent structural error as the null, :mod:`host.diagnose.strata`)."""
     e = w.residual
     n = e.size
     length = block_length(e)
+    strata = state_strata(w.rs, rules.strata_input_bins, rules.strata_turn_bins)[w.keep]
+    boot = _adjusted(
+        lambda count: e[stationary_draws(n, length, count, rng)], dynamic, marginal, unique, t_m, t_u, rules
+    )
+    perm = _adjusted(
+        lambda count: e[within_strata_permutations(strata, count, rng).T], dynamic, marginal, unique, t_m, t_u, rules
+    )
+    return (
+        {g: max(boot[0][g], perm[0][g]) for g in dynamic},
+        {g: max(boot[1][g], perm[1][g]) for g in dynamic},
+    )
+
+
+def _adjusted(
+    resample: Callable[[int], Matrix],
+    dynamic: list[str],
+    marginal: dict[str, Matrix],
+    unique: dict[str, Matrix],
+    t_m: dict[str, float],
+    t_u: dict[str, float],
+    rules: Rules,
+) -> tuple[dict[str, float], dict[str, float]]:
+    """Max-T adjusted p-values against residuals drawn by ``resample(count)`` (n x count)."""
+    n = next(iter(marginal.values())).shape[0] if marginal else 1
     z_u = {g: [] for g in dynamic}  # type: dict[str, list[NDArray[np.float64]]]
     z_m = {g: [] for g in dynamic}  # type: dict[str, list[NDArray[np.float64]]]
     remaining = rules.bootstrap_draws
     while remaining > 0:
         chunk = min(remaining, max(1, 4_000_000 // n))
-        draws = e[stationary_draws(n, length, chunk, rng)]
+        draws = resample(chunk)
         sigma2 = np.mean(draws**2, axis=0)
         for g in dynamic:
             z_u[g].append(_z(_stat(unique[g], draws, sigma2), unique[g].shape[1]))

@@ -84,6 +84,10 @@ class Rules:
     alpha: float = 0.05
     # block-bootstrap draws of the whitened null residual: p resolution 1/500
     bootstrap_draws: int = 499
+    # rate-independent state strata of the within-state permutation null: input quantile bins x
+    # direction of the last move x quantile bins of where the input last turned
+    strata_input_bins: int = 12
+    strata_turn_bins: int = 4
     # surrogate copies of each measured column: p resolution 1/200
     column_surrogates: int = 199
     # a column whose chi-square p exceeds this cannot pass its surrogate test: the surrogates are skipped
