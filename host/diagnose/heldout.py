@@ -73,7 +73,7 @@ class HeldOut:
 def held_out(
     rs: RunSet,
     nuisance: NDArray[np.float64],
-    node_columns: int,
+    smoothness: NDArray[np.float64],
     group: NDArray[np.float64],
     masks: list[NDArray[np.bool_]],
     ridge: float,
@@ -86,8 +86,8 @@ def held_out(
     fold_gains = []
     for held in masks:
         train = ~held
-        base[held] = nuisance[held] @ ridge_fit(nuisance[train], y[train], node_columns, ridge)
-        ext[held] = extended[held] @ ridge_fit(extended[train], y[train], node_columns, ridge)
+        base[held] = nuisance[held] @ ridge_fit(nuisance[train], y[train], smoothness, ridge)
+        ext[held] = extended[held] @ ridge_fit(extended[train], y[train], smoothness, ridge, group.shape[1])
         b = float(np.sqrt(np.mean((base[held] - y[held]) ** 2)))
         fold_gains.append(1.0 - float(np.sqrt(np.mean((ext[held] - y[held]) ** 2))) / (b or 1.0))
     eb, ee = (base - y) ** 2, (ext - y) ** 2

@@ -46,16 +46,26 @@ def run_gradient(rs: RunSet, x: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def ridge_fit(
-    design: NDArray[np.float64], y: NDArray[np.float64], ridge_cols: int, ridge: float
+    design: NDArray[np.float64],
+    y: NDArray[np.float64],
+    smoothness: NDArray[np.float64],
+    strength: float,
+    tail_cols: int = 0,
 ) -> NDArray[np.float64]:
-    """Least squares with a ridge (``ridge`` x the mean diagonal) on the first ``ridge_cols``
-    columns only (the Preisach nodes: cells few rows visit stay bounded)."""
+    """Penalised least squares: ``strength`` x the block's mean diagonal x ``smoothness`` (a
+    k x k matrix, D^T D of neighbouring-node differences) on the first k columns (the Preisach
+    nodes: smooth, so cells no training row visits take their neighbours' values), and a ridge
+    of ``strength`` on the last ``tail_cols`` (a cause's group: collinear with the nuisance's
+    lags, it must not cancel them in training and fail held out)."""
     gram = design.T @ design
-    scale = float(np.trace(gram[:ridge_cols, :ridge_cols])) / max(ridge_cols, 1) or 1.0
-    penalty = np.zeros(design.shape[1])
-    penalty[:ridge_cols] = ridge * scale
-    penalty[ridge_cols:] = 1e-10 * (float(np.trace(gram)) / design.shape[1] or 1.0)
-    return np.asarray(np.linalg.solve(gram + np.diag(penalty), design.T @ y))
+    diag = np.diag(gram)
+    k = smoothness.shape[0]
+    penalty = np.diag(np.full(design.shape[1], 1e-10 * (float(diag.mean()) or 1.0)))
+    if k:
+        penalty[:k, :k] += strength * (float(diag[:k].mean()) or 1.0) * (smoothness + 1e-4 * np.eye(k))
+    if tail_cols:
+        penalty[-tail_cols:, -tail_cols:] += strength * (float(diag[-tail_cols:].mean()) or 1.0) * np.eye(tail_cols)
+    return np.asarray(np.linalg.solve(gram + penalty, design.T @ y))
 
 
 @dataclass
@@ -63,7 +73,7 @@ class Baseline:
     """M0 fitted to every row, and the nuisance columns the tests partial out."""
 
     nuisance: NDArray[np.float64]  # n x p: lagged nodes, tangents, output map, constant
-    node_columns: int  # the first columns of ``nuisance`` that are Preisach nodes (ridge applies)
+    smoothness: NDArray[np.float64]  # D^T D over the first columns of ``nuisance`` (the Preisach nodes)
     x: NDArray[np.float64]  # the hysteresis output (static, before the lag) [units of y]
     prediction: NDArray[np.float64]  # M0's output on every row [units of y]
     lag_s: float
@@ -76,6 +86,7 @@ class Baseline:
 def fit_baseline(
     rs: RunSet,
     nodes: NDArray[np.float64],
+    smoothness: NDArray[np.float64],
     lags_s: tuple[float, ...],
     ridge: float,
     extra_lags_s: tuple[float, ...] = (),
@@ -84,7 +95,7 @@ def fit_baseline(
     the lagged hysteresis output, then the masses refitted through that lag (one alternation)."""
     y = rs.y
     ones = np.ones((y.size, 1))
-    theta = ridge_fit(np.hstack([nodes, ones]), y, nodes.shape[1], ridge)
+    theta = ridge_fit(np.hstack([nodes, ones]), y, smoothness, ridge)
     x = nodes @ theta[:-1]
 
     def lag_error(tau: float) -> float:
@@ -95,7 +106,7 @@ def fit_baseline(
     usable = [tau for tau in lags_s if tau == 0 or tau >= 0.5 * rs.dt]
     lag = min(usable, key=lag_error)
     lagged_nodes = run_lowpass(rs, nodes, lag)
-    theta = ridge_fit(np.hstack([lagged_nodes, ones]), y, nodes.shape[1], ridge)
+    theta = ridge_fit(np.hstack([lagged_nodes, ones]), y, smoothness, ridge)
     x = nodes @ theta[:-1]
     xc = (x - x.mean()) / (np.std(x) or 1.0)
     lagged_x = run_lowpass(rs, x, lag)
@@ -110,8 +121,8 @@ def fit_baseline(
         + [run_lowpass(rs, x, tau) - lagged_x for tau in extra_lags_s if tau != lag]
     )
     nuisance = np.hstack([lagged_nodes, tangents, ones])
-    coef = ridge_fit(nuisance, y, nodes.shape[1], ridge)
-    return Baseline(nuisance, nodes.shape[1], x, nuisance @ coef, lag)
+    coef = ridge_fit(nuisance, y, smoothness, ridge)
+    return Baseline(nuisance, smoothness, x, nuisance @ coef, lag)
 
 
 def ar_whitener(residual: NDArray[np.float64], max_order: int) -> NDArray[np.float64]:

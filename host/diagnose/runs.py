@@ -132,6 +132,22 @@ def run_set(runs: list[Measurement], max_rows: int, min_samples: int) -> RunSet:
     )
 
 
+def node_differences(levels: int) -> NDArray[np.float64]:
+    """First differences between neighbouring Everett nodes (one row per neighbouring pair), for a
+    smoothness penalty: nodes no training row visits take their neighbours' values instead of 0."""
+    grid = EverettGrid(0.0, 1.0, levels)
+    pairs = []
+    for j, k in zip(grid.rows, grid.cols):
+        if j + 1 <= levels:
+            pairs.append((grid.flat[j, k], grid.flat[j + 1, k]))
+        if k + 1 < j:
+            pairs.append((grid.flat[j, k], grid.flat[j, k + 1]))
+    d = np.zeros((len(pairs), grid.size))
+    for row, (a, b) in enumerate(pairs):
+        d[row, a], d[row, b] = 1.0, -1.0
+    return d
+
+
 def preisach_nodes(rs: RunSet, levels: int) -> tuple[NDArray[np.float64], list[str]]:
     """Preisach regressor rows (Everett nodes on one grid over every run's input), each run from
     its own first sample: from where the memory is known when the run reaches an end of the
@@ -156,11 +172,10 @@ def preisach_nodes(rs: RunSet, levels: int) -> tuple[NDArray[np.float64], list[s
             offset += len(block)
         block_rows[: begin.index] = block_rows[begin.index]  # before the memory is known: its first known row
         rows[a:b] = block_rows
-    keep = np.abs(rows).sum(axis=0) > 0
     notes = []
     if assumed:
         notes.append(
             f"{assumed} of {rs.n_runs} run(s) never reach an end of the input range in their first half, so their "
             "hysteresis state at the start is assumed (the input rose from the range's minimum)"
         )
-    return rows[:, keep], notes
+    return rows, notes

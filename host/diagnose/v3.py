@@ -32,7 +32,7 @@ from host.diagnose.groups import branch_of, cause_groups, column_group
 from host.diagnose.heldout import HeldOut, held_out, holdout_folds
 from host.diagnose.nuisance import Baseline, fit_baseline
 from host.diagnose.rules import CAUSES, RULES, Rules
-from host.diagnose.runs import RunSet, preisach_nodes, run_set
+from host.diagnose.runs import RunSet, node_differences, preisach_nodes, run_set
 
 
 @dataclass
@@ -53,6 +53,7 @@ class DiagnosisV3:
     rules: Rules
     notes: list[str] = field(default_factory=list)
     not_confirmed: bool = False  # a cause passed its test on the record but not held out
+    rejected: list[str] = field(default_factory=list)  # passed on the record, failed the ladder or held out
     seconds: float = 0.0
     cpu_seconds: float = 0.0
 
@@ -68,6 +69,7 @@ class DiagnosisV3:
             "also": self.also,
             "cannot_tell": self.cannot_tell,
             "class_mismatch": self.class_mismatch,
+            "rejected": self.rejected,
             "reason": self.reason,
             "p_values": {g: round(t.unique_p, 6) for g, t in self.tests.items()},
             "interval_90": list(self.heldout.interval) if self.heldout else None,
@@ -92,7 +94,8 @@ def score(
 ) -> tuple[Baseline, dict[str, NDArray[np.float64]], dict[str, GroupTest], list[str]]:
     """Baseline at ``levels`` and every cause's tests."""
     nodes, notes = preisach_nodes(rs, levels)
-    base = fit_baseline(rs, nodes, rules.output_lags_s, rules.node_ridge, rules.nuisance_lags_s)
+    smooth = node_differences(levels)
+    base = fit_baseline(rs, nodes, smooth.T @ smooth, rules.output_lags_s, rules.node_ridge, rules.nuisance_lags_s)
     groups = cause_groups(rs, base, rules)
     w = whitened(rs, base, rules)
     branch = branch_of(rs)
@@ -104,17 +107,17 @@ def score(
     return base, groups, tests, notes
 
 
-def decide(tests: dict[str, GroupTest]) -> tuple[str, list[str], list[str]]:
-    """(cause, also, cannot_tell): named by a unique test at its level, the largest unique share
-    first (a physical cause before ``slow_drift``); else the causes significant only jointly."""
+def decide(tests: dict[str, GroupTest]) -> tuple[list[str], list[str]]:
+    """(candidates, cannot_tell): the causes whose unique test passes at their level, the largest
+    unique share first (a physical cause before ``slow_drift``); or, when none does, the one cause
+    significant beyond the baseline alone; else those significant only jointly (cannot tell)."""
     unique = [g for g, t in tests.items() if t.unique_p <= t.level]
     if unique:
-        ranked = sorted(unique, key=lambda g: (g == "slow_drift", -tests[g].unique_share))
-        return ranked[0], ranked[1:], []
+        return sorted(unique, key=lambda g: (g == "slow_drift", -tests[g].unique_share)), []
     joint = [g for g, t in tests.items() if t.marginal_p <= t.level]
     if len(joint) == 1:
-        return joint[0], [], []
-    return "none", [], sorted(joint, key=lambda g: tests[g].marginal_p)
+        return joint, []
+    return [], sorted(joint, key=lambda g: tests[g].marginal_p)
 
 
 def diagnose_runs(
@@ -127,52 +130,59 @@ def diagnose_runs(
     with threadpool_limits(limits=threads):
         _say(progress, f"diagnose v3: {rs.n_runs} run(s), {rs.y.size} samples: baseline and tests ...")
         base, groups, tests, notes = score(rs, rules.preisach_levels, rules, seed)
-        cause, also, cannot_tell = decide(tests)
-        class_mismatch = False
-        if cause != "none" and CAUSES[cause].kind == "dynamic":
-            _say(progress, f"diagnose v3: {cause} passes; checking it against a richer baseline ...")
-            _, _, richer, _ = score(rs, rules.richer_levels, rules, seed + 1)
-            if (
-                richer[cause].unique_p > richer[cause].level
-                and richer[cause].unique_stat < (1 - rules.ladder_drop) * tests[cause].unique_stat
-            ):
-                class_mismatch = True
+        ranked, cannot_tell = decide(tests)
         masks, holdout = holdout_folds(rs, rules)
-        result_heldout = None
-        extended = None
-        not_confirmed = False
-        if cause != "none" and not class_mismatch:
-            _say(progress, f"diagnose v3: held-out gain of {cause} over {len(masks)} folds ...")
-            result_heldout = held_out(
+        richer: dict[str, GroupTest] | None = None
+        cause, class_mismatch, not_confirmed = "none", False, False
+        result_heldout: HeldOut | None = None
+        rejected: list[str] = []
+        for candidate in ranked:  # the largest unique share first; the first confirmed is named
+            if CAUSES[candidate].kind == "dynamic":
+                if richer is None:
+                    _say(progress, "diagnose v3: checking the dynamic causes against a richer baseline ...")
+                    richer = score(rs, rules.richer_levels, rules, seed + 1)[2]
+                r = richer[candidate]
+                if r.unique_p > r.level and r.unique_stat < (1 - rules.ladder_drop) * tests[candidate].unique_stat:
+                    class_mismatch = class_mismatch or not rejected
+                    rejected.append(candidate)
+                    continue
+            _say(progress, f"diagnose v3: held-out gain of {candidate} over {len(masks)} folds ...")
+            trial = held_out(
                 rs,
                 base.nuisance,
-                base.node_columns,
-                groups[cause],
+                base.smoothness,
+                groups[candidate],
                 masks,
                 rules.node_ridge,
                 np.random.default_rng(seed),
             )
-            extended = result_heldout.ext_prediction
             # nested confirmation: the extension must predict rows it was not fitted on
-            not_confirmed = result_heldout.clark_west_p > rules.alpha or result_heldout.interval[0] <= 0.0
-    named = cause if not (class_mismatch or not_confirmed) else "none"
+            if trial.clark_west_p <= rules.alpha and trial.interval[0] > 0.0:
+                cause, result_heldout, class_mismatch, not_confirmed = candidate, trial, False, False
+                break
+            if not rejected:
+                result_heldout, not_confirmed = trial, True
+            rejected.append(candidate)
+    also = [g for g in ranked if g != cause and g not in rejected] if cause != "none" else []
+    first = rejected[0] if rejected else "none"
     out = DiagnosisV3(
-        named,
-        also if named != "none" else [],
+        cause,
+        also,
         cannot_tell,
-        class_mismatch,
+        class_mismatch and cause == "none",
         "",
         tests,
         result_heldout,
         holdout,
         rs,
         base,
-        extended,
+        result_heldout.ext_prediction if result_heldout is not None and cause != "none" else None,
         rules,
         rs.notes + notes,
-        not_confirmed=not_confirmed,
+        not_confirmed=not_confirmed and cause == "none",
+        rejected=rejected,
     )
-    out.reason = explain(out, cause)
+    out.reason = explain(out, first)
     out.seconds, out.cpu_seconds = time.perf_counter() - wall, time.process_time() - cpu
     return out
 
@@ -204,7 +214,9 @@ def explain(d: DiagnosisV3, tested: str) -> str:
             if hv
             else ""
         )
-        also = f"; also significant on its own: {', '.join(d.also)}" if d.also else ""
+        also = f"; also significant on its own (not checked held out): {', '.join(d.also)}" if d.also else ""
+        if d.rejected:
+            also += f"; passed on the record but failed held out or with a richer baseline: {', '.join(d.rejected)}"
         return (
             f"{d.cause}: its own regressors ({CAUSES[d.cause].meaning}) explain {g.unique_share:.1%} of the whitened "
             f"residual beyond the baseline and every other cause (p = {g.unique_p:.2g} at level {g.level:.3g}, "
