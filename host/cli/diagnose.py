@@ -192,7 +192,8 @@ def _runs_v3(args: argparse.Namespace) -> int:
         first = str(caught[0].message)
         more = f" (and {len(caught) - 1} more like it)" if len(caught) > 1 else ""
         print(f"pmactl: warning: {first}{more}", file=sys.stderr)
-    result = diagnose_runs(runs, progress=not to_stdout and sys.stderr.isatty() or len(runs) > 10)
+    # a progress line on stderr for anything that takes more than a few seconds (stdout stays clean)
+    result = diagnose_runs(runs, progress=sum(len(m) for m in runs) > 10_000 or len(runs) > 10)
     title = Path(args.data[0]).name if len(runs) == 1 else f"{len(runs)} runs ({Path(args.data[0]).name} ...)"
     say(f"{title}: cause {result.cause} (method {result.rules.version})")
     say(f"  {result.reason}")
