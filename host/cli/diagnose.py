@@ -94,6 +94,15 @@ def expand(patterns: list[str]) -> list[str]:
 def run(args: argparse.Namespace) -> int:
     args.data = expand(list(args.data))
     args.test = expand(list(args.test))
+    if args.train:
+        trains = expand([args.train])
+        if len(trains) > 1:
+            raise DataError(
+                f"--train {args.train} matches {len(trains)} files; cross-run takes one training recording. To "
+                "diagnose several runs together (a load or a date that differs between runs is a column), name them "
+                "all: pmactl diagnose A*.csv B*.csv"
+            )
+        args.train = trains[0]
     if args.method == "v3" or len(args.data) > 1:
         if args.train or args.test:
             raise DataError(
