@@ -78,8 +78,14 @@ def held_out(
     masks: list[NDArray[np.bool_]],
     ridge: float,
     rng: np.random.Generator,
+    column: NDArray[np.float64] | None = None,
 ) -> HeldOut:
+    """Both models per fold (see module docstring). With a measured ``column``, a fold scores only
+    the held-out rows whose column value lies inside its training rows' range: a column term is
+    not asked to extrapolate to loads or temperatures it never saw (such rows are left out of
+    every score, the baseline's included)."""
     y = rs.y
+    scored = np.zeros(y.size, dtype=bool)
     base = np.empty_like(y)
     ext = np.empty_like(y)
     extended = np.hstack([nuisance, group])
@@ -88,12 +94,21 @@ def held_out(
         train = ~held
         base[held] = nuisance[held] @ ridge_fit(nuisance[train], y[train], smoothness, ridge)
         ext[held] = extended[held] @ ridge_fit(extended[train], y[train], smoothness, ridge, group.shape[1])
-        b = float(np.sqrt(np.mean((base[held] - y[held]) ** 2)))
-        fold_gains.append(1.0 - float(np.sqrt(np.mean((ext[held] - y[held]) ** 2))) / (b or 1.0))
-    eb, ee = (base - y) ** 2, (ext - y) ** 2
+        rows = held.copy()
+        if column is not None:
+            rows &= (column >= column[train].min()) & (column <= column[train].max())
+        scored |= rows
+        if not rows.any():
+            fold_gains.append(float("nan"))
+            continue
+        b = float(np.sqrt(np.mean((base[rows] - y[rows]) ** 2)))
+        fold_gains.append(1.0 - float(np.sqrt(np.mean((ext[rows] - y[rows]) ** 2))) / (b or 1.0))
+    if scored.sum() < 10:
+        scored[:] = True  # nothing inside the training ranges: score every row rather than none
+    eb, ee = (base[scored] - y[scored]) ** 2, (ext[scored] - y[scored]) ** 2
     base_rmse, ext_rmse = float(np.sqrt(eb.mean())), float(np.sqrt(ee.mean()))
     gain = 1.0 - ext_rmse / (base_rmse or 1.0)
-    cw = eb - ee + (base - ext) ** 2
+    cw = eb - ee + (base[scored] - ext[scored]) ** 2
     t_cw = float(cw.mean() / _hac_se(cw))
     return HeldOut(
         base_rmse,

@@ -147,6 +147,7 @@ def diagnose_runs(
                     rejected.append(candidate)
                     continue
             _say(progress, f"diagnose v3: held-out gain of {candidate} over {len(masks)} folds ...")
+            column = CAUSES[candidate].column
             trial = held_out(
                 rs,
                 base.nuisance,
@@ -155,6 +156,7 @@ def diagnose_runs(
                 masks,
                 rules.node_ridge,
                 np.random.default_rng(seed),
+                rs.columns.get(column) if column else None,
             )
             # nested confirmation: the extension must predict rows it was not fitted on
             if trial.clark_west_p <= rules.alpha and trial.interval[0] > 0.0:
