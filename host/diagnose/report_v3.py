@@ -21,20 +21,39 @@ def _rolling_rms(e: NDArray[np.float64], width: int) -> NDArray[np.float64]:
 
 
 def _where_it_fails(d: DiagnosisV3, path: Path, units: str) -> None:
+    """Rolling RMS error over the campaign clock and, for several runs, the RMS error per run."""
     rs = d.runset
     width = max(1, rs.y.size // 200)
-    fig, ax = plt.subplots(figsize=(10, 3.6))
+    panels = 2 if rs.n_runs > 1 else 1
+    fig, axes = plt.subplots(panels, 1, figsize=(10, 3.4 * panels), squeeze=False)
+    ax = axes[0, 0]
     before = d.heldout.base_prediction if d.heldout else d.baseline.prediction
+    after = d.heldout.ext_prediction if d.heldout else None
     ax.plot(rs.clock, _rolling_rms(before - rs.y, width), lw=0.8, color="0.35", label="baseline")
-    if d.heldout is not None:
-        ax.plot(rs.clock, _rolling_rms(d.heldout.ext_prediction - rs.y, width), lw=0.8, color="tab:red", label=d.cause)
+    if after is not None:
+        ax.plot(rs.clock, _rolling_rms(after - rs.y, width), lw=0.8, color="tab:red", label=f"+ {d.cause}")
     for a, _b in rs.bounds()[1:]:
-        ax.axvline(rs.clock[a], color="0.8", lw=0.5)
+        ax.axvline(rs.clock[a], color="0.85", lw=0.5)
     ax.set_xlabel("time since the first run started [s] (grey lines: run boundaries)" if rs.n_runs > 1 else "time [s]")
     ax.set_ylabel(f"rolling RMS error [{units}]")
     kind = "held-out prediction" if d.heldout else "baseline fitted on every row"
     ax.set_title(f"where the model fails ({kind})", fontsize=10)
     ax.legend(fontsize=8)
+    if panels == 2:
+        ax = axes[1, 0]
+        index = np.arange(rs.n_runs)
+        per_run = [float(np.sqrt(np.mean((before[a:b] - rs.y[a:b]) ** 2))) for a, b in rs.bounds()]
+        ax.bar(index - 0.2, per_run, width=0.4, color="0.55", label="baseline")
+        if after is not None:
+            fixed = [float(np.sqrt(np.mean((after[a:b] - rs.y[a:b]) ** 2))) for a, b in rs.bounds()]
+            ax.bar(index + 0.2, fixed, width=0.4, color="tab:red", label=f"+ {d.cause}")
+        step = max(1, rs.n_runs // 20)
+        names = [Path(n).stem for n in rs.names]
+        if len(set(names)) < len(names):  # the same file names in several folders (campaigns)
+            names = [f"{Path(n).parent.name[:10]}/{Path(n).stem}" for n in rs.names]
+        ax.set_xticks(index[::step], names[::step], rotation=60, fontsize=7)
+        ax.set_ylabel(f"RMS error per run [{units}]")
+        ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
