@@ -72,11 +72,19 @@ class DiagnosisV3:
             "rejected": self.rejected,
             "reason": self.reason,
             "p_values": {g: round(t.unique_p, 6) for g, t in self.tests.items()},
-            "interval_90": list(self.heldout.interval) if self.heldout else None,
-            "heldout": self.heldout.as_json() if self.heldout else None,
+            "interval_90": [round(v, 4) for v in self.heldout.interval]
+            if self.heldout is not None and self.cause != "none"
+            else None,
+            # the named cause's held-out comparison, or the first candidate's that held-out data rejected
+            "heldout": {"of": self.cause if self.cause != "none" else self.rejected[0], **self.heldout.as_json()}
+            if self.heldout is not None and (self.cause != "none" or self.rejected)
+            else None,
             "holdout": self.holdout,
             "evidence": {g: t.as_json() for g, t in self.tests.items()},
-            "baseline": {"output_lag_s": self.baseline.lag_s, "nuisance_columns": self.baseline.nuisance.shape[1]},
+            "baseline": {
+                "output_lag_s": round(self.baseline.lag_s, 6),
+                "nuisance_columns": self.baseline.nuisance.shape[1],
+            },
             "runs": self.runset.names,
             "samples": int(self.runset.y.size),
             "rules": self.rules.as_json(),
