@@ -1,7 +1,10 @@
 """``pmactl diagnose``: name what the simulation gets wrong on a recording and measure the fix.
 
-``pmactl diagnose DATA.csv``: one record, blocked held-out folds. ``pmactl diagnose --train
-A.csv --test B.csv [--test C.csv]``: what a model identified on A gets wrong on B.
+``pmactl diagnose DATA.csv``: one record, blocked held-out folds (method v2 by default).
+``pmactl diagnose RUN1.csv RUN2.csv ...`` or a glob (``'runs/*.csv'``): several runs of one rig
+together, with the calibrated-test method v3 (``--method v3`` chooses it for one record too).
+``pmactl diagnose --train A.csv --test B.csv [--test C.csv]``: what a model identified on A gets
+wrong on B (``--test`` takes globs).
 """
 
 from __future__ import annotations
@@ -9,6 +12,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, cast
@@ -21,12 +25,30 @@ def register(sub: argparse._SubParsersAction) -> None:
     diag = sub.add_parser(
         "diagnose", help="what the simulation gets wrong on a recording: name the cause, extend, measure the gain"
     )
-    diag.add_argument("data", nargs="?", metavar="DATA.csv", help="measured data (t, u, y; optional load, temperature)")
+    diag.add_argument(
+        "data",
+        nargs="*",
+        metavar="RUN.csv",
+        help="measured data (t, u, y; optional load, temperature); several runs or globs are diagnosed together (v3)",
+    )
     diag.add_argument("--train", metavar="A.csv", help="cross-run: identify on this recording ...")
-    diag.add_argument("--test", action="append", default=[], metavar="B.csv", help="... and check it here (repeatable)")
+    diag.add_argument(
+        "--test", action="append", default=[], metavar="B.csv", help="... and check it here (repeatable, globs)"
+    )
+    diag.add_argument(
+        "--method",
+        choices=("v2", "v3"),
+        help="v2: held-out gain floors (default for one record); v3: calibrated conditional tests (default for "
+        "several runs)",
+    )
     diag.add_argument("--report", metavar="DIR", help="write report.md and PNG figures here")
     diag.add_argument("--json", metavar="OUT.json", help="write the result as JSON ('-' for stdout)")
-    diag.add_argument("--folds", type=int, default=4, help="blocked held-out folds in time (default 4)")
+    diag.add_argument(
+        "--folds",
+        type=int,
+        default=None,
+        help="v2: blocked held-out folds in time (default 4); v3 adapts them to the data",
+    )
     diag.add_argument(
         "--stability",
         action="store_true",
@@ -52,7 +74,48 @@ def _write_json(target: str, payload: object) -> None:
     Path(target).write_text(text)
 
 
+def expand(patterns: list[str]) -> list[str]:
+    """File names from names and globs (a shell that did not expand one, or a quoted one), in
+    sorted order per pattern; a pattern that matches nothing is one clear error."""
+    import glob
+
+    out: list[str] = []
+    for pattern in patterns:
+        if any(ch in pattern for ch in "*?[") and not Path(pattern).exists():
+            found = sorted(glob.glob(pattern))
+            if not found:
+                raise DataError(f"{pattern}: no file matches this pattern; check the folder and the spelling")
+            out += found
+        else:
+            out.append(pattern)
+    return out
+
+
 def run(args: argparse.Namespace) -> int:
+    args.data = expand(list(args.data))
+    args.test = expand(list(args.test))
+    if args.train:
+        trains = expand([args.train])
+        if len(trains) > 1:
+            raise DataError(
+                f"--train {args.train} matches {len(trains)} files; cross-run takes one training recording. To "
+                "diagnose several runs together (a load or a date that differs between runs is a column), name them "
+                "all: pmactl diagnose A*.csv B*.csv"
+            )
+        args.train = trains[0]
+    if args.method == "v3" or len(args.data) > 1:
+        if args.train or args.test:
+            raise DataError(
+                "cross-run diagnosis (--train/--test) uses method v2 and one --train file; give runs to diagnose "
+                "together without --train/--test"
+            )
+        if args.stability:
+            raise DataError("--stability is a v2 check; v3 reports held-out folds and an interval instead")
+        if args.method == "v2":
+            raise DataError("method v2 takes one recording; several runs are diagnosed with --method v3 (the default)")
+        return _runs_v3(args)
+    if args.folds is None:
+        args.folds = 4
     if args.folds < 2:
         raise DataError(f"--folds {args.folds}: a held-out comparison needs at least 2 folds; use 2-10 (default 4)")
     to_stdout = args.json == "-"
@@ -72,10 +135,10 @@ def run(args: argparse.Namespace) -> int:
     from host.diagnose.run import diagnose
     from host.diagnose.stability import diagnose_with_stability
 
-    measurement = load_measurement(args.data)
+    measurement = load_measurement(args.data[0])
     run_diagnosis = diagnose_with_stability if args.stability else diagnose
     result = run_diagnosis(measurement, folds=args.folds, progress=progress)
-    name = Path(args.data).name
+    name = Path(args.data[0]).name
     say(f"{name}: cause {result.cause}")
     say(f"  {result.reason}")
     say(f"  decided by: {result.decided_by}")
@@ -117,6 +180,55 @@ def run(args: argparse.Namespace) -> int:
             from host.diagnose.report import write_report
 
             say(f"  report written to {write_report(result, args.report, name)}")
+    except OSError as exc:
+        raise DataError(f"cannot write the results ({exc}); choose a writable --json / --report path") from exc
+    return 0
+
+
+def _runs_v3(args: argparse.Namespace) -> int:
+    """Diagnosis v3 of one or more runs: the verdict, the evidence per cause, the held-out gain."""
+    from host.data import load_measurement
+    from host.diagnose.v3 import diagnose_runs
+
+    if args.folds is not None:
+        raise DataError("--folds is a v2 setting; v3 chooses its folds from the data (blocks, or whole short runs)")
+    to_stdout = args.json == "-"
+    say = (lambda *a: print(*a, file=sys.stderr)) if to_stdout else print
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        runs = [load_measurement(path) for path in args.data]
+    if caught:  # one line, not one per run
+        first = str(caught[0].message)
+        more = f" (and {len(caught) - 1} more like it)" if len(caught) > 1 else ""
+        print(f"pmactl: warning: {first}{more}", file=sys.stderr)
+    # a progress line on stderr for anything that takes more than a few seconds (stdout stays clean)
+    result = diagnose_runs(runs, progress=sum(len(m) for m in runs) > 10_000 or len(runs) > 10)
+    title = Path(args.data[0]).name if len(runs) == 1 else f"{len(runs)} runs ({Path(args.data[0]).name} ...)"
+    say(f"{title}: cause {result.cause} (method {result.rules.version})")
+    say(f"  {result.reason}")
+    if result.cannot_tell:
+        say(f"  cannot tell apart: {', '.join(result.cannot_tell)}")
+    if result.also:
+        say(f"  also: {', '.join(result.also)}")
+    say(f"  {'cause':<18} {'unique p':>9} {'marginal p':>10} {'level':>7} {'share':>7} {'MDE':>9}")
+    for g, t in result.tests.items():
+        say(f"  {g:<18} {t.unique_p:>9.3g} {t.marginal_p:>10.3g} {t.level:>7.3g} {t.unique_share:>7.2%} {t.mde:>9.3g}")
+    say(f"  held-out: {result.holdout}")
+    say(f"  time: {result.seconds:.1f} s wall, {result.cpu_seconds:.1f} s CPU")
+    run_notes = [f"{Path(m.source).name}: {n}" for m in runs for n in m.notes]
+    if run_notes:
+        say(f"  note: {run_notes[0]}" + (f" (and {len(run_notes) - 1} more run notes)" if len(run_notes) > 1 else ""))
+    for note in result.notes:
+        say(f"  note: {note}")
+    try:
+        if args.json:
+            _write_json(args.json, result.as_json())
+            if not to_stdout:
+                say(f"  JSON written to {args.json}")
+        if args.report:
+            from host.diagnose.report_v3 import write_report_v3
+
+            say(f"  report written to {write_report_v3(result, args.report, title)}")
     except OSError as exc:
         raise DataError(f"cannot write the results ({exc}); choose a writable --json / --report path") from exc
     return 0

@@ -1,0 +1,107 @@
+"""Scorecard of diagnosis v3 (``pmactl diagnose --method v3``) on plant families, on a subset.
+
+Usage: python bench/diagnose_v3_scorecard.py --set tuning[,fresh,...] [--duration S] [--every K]
+
+Scores every K-th case of each family (effect-free records included in the same stride) at the
+given record duration, and prints per record the verdict, the held-out gain, the unique-test
+p-value of the true cause and CPU seconds; then per family: effects named, false alarms on the
+effect-free records, how many true causes passed their unique test on the whole record (before
+the held-out confirmation), and the median held-out gain when named. For families whose module
+can simulate a case with and without its effect (every family but tuning), also how many effects
+the *oracle's* own test detects at the method's level: the effect's true noise-free waveform as
+one regressor, tested beyond the baseline (whitened, block-bootstrap calibrated, at the level of
+one cause); "detectable" means that, not a floor.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+import importlib  # noqa: E402
+
+from host.data import Measurement  # noqa: E402
+from host.diagnose.conditional import block_length, orthonormal, stationary_draws, whitened  # noqa: E402
+from host.diagnose.rules import RULES  # noqa: E402
+from host.diagnose.runs import run_set  # noqa: E402
+from host.diagnose.v3 import diagnose_runs, score  # noqa: E402
+from tests.plants.families import FAMILIES, family_names  # noqa: E402
+
+
+def oracle_p(m: Measurement, waveform: np.ndarray, tests: int) -> float:
+    """Block-bootstrap p of the true effect waveform as one regressor beyond v3's baseline, at the
+    level of one of ``tests`` causes (returned p is compared with alpha / tests by the caller)."""
+    rs = run_set([m], RULES.max_rows, RULES.min_samples)
+    wave = run_set([Measurement(m.t, m.u, waveform, {}, m.source)], RULES.max_rows, RULES.min_samples).y
+    base = score(rs, RULES.preisach_levels, RULES, 0)[0]
+    w = whitened(rs, base, RULES)
+    u = orthonormal(w.prepare(wave[:, None]))
+    e = w.residual
+    stat = float(np.sum((u.T @ e) ** 2))
+    draws = e[stationary_draws(e.size, block_length(e), 199, np.random.default_rng(0))]
+    null = np.sum((u.T @ draws) ** 2, axis=0) * (e @ e / e.size) / np.mean(draws**2, axis=0)
+    return float((1 + np.sum(null >= stat)) / 200)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--set", default="tuning")
+    parser.add_argument("--duration", type=float, default=60.0, metavar="S")
+    parser.add_argument("--every", type=int, default=1, metavar="K")
+    args = parser.parse_args(argv)
+    for family in family_names(args.set):
+        cases_of, record = FAMILIES[family]
+        cases = cases_of(args.duration)[:: args.every]
+        named = detected = effects = false = nones = oracle_yes = oracle_known = 0
+        family_module = importlib.import_module(cases_of.__module__)
+        gains, cpu = [], []
+        for case in cases:
+            m, _ = record(case)
+            start = time.process_time()
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                d = diagnose_runs([m])
+            cpu.append(time.process_time() - start)
+            truth = d.tests.get(case.effect)
+            if case.effect == "none":
+                nones += 1
+                false += d.cause != "none"
+            else:
+                effects += 1
+                named += d.cause == case.effect
+                detected += truth is not None and truth.unique_p <= truth.level
+                if d.cause == case.effect:
+                    gains.append(d.gain)
+            p = f"{truth.unique_p:.3f}" if truth else "  -  "
+            oracle = ""
+            if case.effect != "none" and hasattr(family_module, "simulate"):
+                sim = family_module.simulate(case)
+                if "on" in sim and "off" in sim:
+                    p_oracle = oracle_p(m, np.asarray(sim["on"] - sim["off"], dtype=np.float64), len(d.tests))
+                    oracle_known += 1
+                    oracle_yes += p_oracle <= RULES.alpha / len(d.tests)
+                    oracle = f" p_oracle {p_oracle:.3f}"
+            print(
+                f"{case.name:<62} -> {d.cause:<18} gain {d.gain:+6.1%} p_true {p} cpu {cpu[-1]:5.1f}s{oracle}",
+                flush=True,
+            )
+        print(
+            f"\n## {family} (every {args.every}th case, {args.duration:g} s): named {named}/{effects}, "
+            f"true cause's unique test passed {detected}/{effects}, false alarms {false}/{nones}, median gain when "
+            f"named {np.median(gains) if gains else float('nan'):.1%}, CPU median {np.median(cpu):.1f} s"
+            + (f", oracle detects {oracle_yes}/{oracle_known}" if oracle_known else "")
+            + "\n",
+            flush=True,
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,304 @@
+"""Conditional group tests on whitened data, calibrated per record.
+
+For each cause group ``g`` (:mod:`host.diagnose.groups`), in the AR-whitened regression of the
+output on [baseline nuisance, every group]:
+
+* *marginal*: the Wald statistic of ``g`` conditional on the nuisance only;
+* *unique*: conditional on the nuisance and every other group (Frisch-Waugh-Lovell: ``g``'s
+  columns are partialled out against the others, then projected on the residual).
+
+The statistics are calibrated by a stationary block bootstrap of the whitened null residual
+(Politis-Romano; block length by Politis-White, :func:`arch.bootstrap.optimal_block_length`),
+family-wise over the dynamic groups by single-step max-T (Westfall-Young) on chi-square
+standardised statistics; a measured column's statistics against surrogate copies of the column
+(circular shifts and mirrors, or its per-run values permuted across runs), since a slow or
+input-locked structural error is what a column can fit by chance.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.stats import chi2, ncx2
+
+from host.diagnose.nuisance import Baseline, ar_whitener, kept_rows, whiten
+from host.diagnose.rules import CAUSES, Rules
+from host.diagnose.runs import RunSet
+from host.diagnose.strata import state_strata, within_strata_permutations
+
+Matrix = NDArray[np.float64]
+
+
+def orthonormal(m: Matrix, tol: float = 1e-8) -> Matrix:
+    """An orthonormal basis of ``m``'s column space (directions below ``tol`` x the largest dropped)."""
+    if m.shape[1] == 0:
+        return m
+    u, s, _ = np.linalg.svd(m, full_matrices=False)
+    return np.asarray(u[:, s > tol * (s[0] if s.size else 0.0)])
+
+
+def partial_out(q: Matrix, m: Matrix) -> Matrix:
+    """``m`` minus its projection on the orthonormal columns ``q``."""
+    return m - q @ (q.T @ m) if q.shape[1] else m
+
+
+@dataclass
+class GroupTest:
+    """One cause group's evidence on one record."""
+
+    name: str
+    df: int  # directions of the group left after the nuisance and the other groups
+    unique_stat: float
+    unique_p: float  # family-wise adjusted (dynamic groups) or surrogate (columns)
+    marginal_stat: float
+    marginal_p: float
+    unique_share: float  # share of the whitened residual's variance the group explains on its own
+    identifiable: float  # share of the group's norm left after partialling out the nuisance
+    mde: float  # minimal detectable RMS of the effect's own part [units of y], 80 % power at its level
+    level: float  # the significance level this cause is tested at (alpha split over the causes)
+    null: str  # which null calibrated it
+
+    def as_json(self) -> dict[str, object]:
+        return {k: (round(v, 6) if isinstance(v, float) else v) for k, v in self.__dict__.items()}
+
+
+@dataclass
+class Whitened:
+    """The whitened regression shared by every test of one record."""
+
+    rs: RunSet
+    ar: NDArray[np.float64]
+    keep: NDArray[np.bool_]
+    q_nuisance: Matrix
+    residual: Matrix  # whitened output after the nuisance (the null residual), 1-D
+    to_units: float  # RMS of the raw null residual / RMS of the whitened one
+
+    def prepare(self, columns: Matrix) -> Matrix:
+        """Columns whitened, kept, and partialled out against the nuisance."""
+        return partial_out(self.q_nuisance, whiten(self.rs, columns, self.ar)[self.keep])
+
+
+def whitened(rs: RunSet, base: Baseline, rules: Rules) -> Whitened:
+    raw = rs.y - base.prediction
+    ar = ar_whitener(raw, rules.max_ar_order)
+    keep = kept_rows(rs, ar.size)
+    q = orthonormal(whiten(rs, base.nuisance, ar)[keep])
+    residual = partial_out(q, whiten(rs, rs.y, ar)[keep][:, None])[:, 0]
+    scale = float(np.sqrt(np.mean(raw**2)) / (np.sqrt(np.mean(residual**2)) or 1.0))
+    return Whitened(rs, ar, keep, q, residual, scale)
+
+
+def block_length(residual: NDArray[np.float64]) -> float:
+    """Mean block length of the stationary bootstrap (Politis-White with Patton's correction)."""
+    from arch.bootstrap import optimal_block_length
+
+    length = float(optimal_block_length(residual)["stationary"].iloc[0])
+    return float(np.clip(length if np.isfinite(length) else 1.0, 1.0, residual.size / 10))
+
+
+def stationary_draws(n: int, mean_block: float, draws: int, rng: np.random.Generator) -> NDArray[np.intp]:
+    """Indices of ``draws`` stationary-bootstrap resamples (n x draws): geometric blocks, wrapped."""
+    idx = np.empty((n, draws), dtype=np.intp)
+    idx[0] = rng.integers(0, n, draws)
+    fresh = rng.random((n, draws)) < 1.0 / mean_block
+    starts = rng.integers(0, n, (n, draws))
+    for i in range(1, n):
+        idx[i] = np.where(fresh[i], starts[i], (idx[i - 1] + 1) % n)
+    return idx
+
+
+def _stat(basis: Matrix, e: Matrix, sigma2: NDArray[np.float64] | float) -> NDArray[np.float64]:
+    return np.asarray(np.sum((basis.T @ e) ** 2, axis=0) / sigma2)
+
+
+def _z(stat: NDArray[np.float64] | float, df: int) -> NDArray[np.float64]:
+    """Chi-square standardised statistic: -log of its chi2 p (max-T over groups of unequal df)."""
+    return np.asarray(-chi2.logsf(stat, max(df, 1)))
+
+
+def mde(df: int, level: float, sigma2: float, n: int, to_units: float) -> float:
+    """Smallest RMS of an effect's own part [units of y] its test finds with 80 % power."""
+    if df < 1:
+        return float("inf")
+    critical = chi2.isf(level, df)
+    lo, hi = 0.0, 1.0
+    while ncx2.sf(critical, df, hi) < 0.8:
+        hi *= 2
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ncx2.sf(critical, df, mid) < 0.8 else (lo, mid)
+    return float(np.sqrt(hi * sigma2 / n) * to_units)
+
+
+def group_tests(
+    w: Whitened,
+    groups: dict[str, Matrix],
+    rules: Rules,
+    surrogate_group: Callable[[str, NDArray[np.float64]], Matrix],
+    rng: np.random.Generator,
+) -> dict[str, GroupTest]:
+    """Every group's marginal and unique tests (see module docstring). ``surrogate_group(cause,
+    column_copy)`` builds a column cause's regressors from a surrogate copy of its column."""
+    names = list(groups)
+    partialled = {g: w.prepare(groups[g]) for g in names}
+    e = w.residual[:, None]
+    n = e.shape[0]
+    q_all = orthonormal(np.hstack([partialled[g] for g in names]))
+    full = partial_out(q_all, e)
+    dof = max(n - w.q_nuisance.shape[1] - q_all.shape[1], 1)
+    sigma2 = float(full[:, 0] @ full[:, 0]) / dof
+    marginal = {g: orthonormal(partialled[g]) for g in names}
+    others = {g: orthonormal(np.hstack([partialled[h] for h in names if h != g] or [np.zeros((n, 0))])) for g in names}
+    unique = {g: orthonormal(partial_out(others[g], partialled[g])) for g in names}
+    t_m = {g: float(_stat(marginal[g], e, sigma2)[0]) for g in names}
+    t_u = {g: float(_stat(unique[g], e, sigma2)[0]) for g in names}
+    dynamic = [g for g in names if CAUSES[g].kind != "column"]
+    columns = [g for g in names if CAUSES[g].kind == "column"]
+    level_dynamic = rules.alpha * len(dynamic) / len(names)
+    level_column = rules.alpha / len(names)
+    p_u, p_m = _max_t(w, dynamic, marginal, unique, t_m, t_u, rules, rng)
+    nulls = {
+        g: f"max-T over {len(dynamic)} groups: block bootstrap and within-state permutations "
+        f"({rules.bootstrap_draws} each)"
+        for g in dynamic
+    }
+    for g in columns:
+        raw = float(chi2.sf(t_u[g], max(unique[g].shape[1], 1)))
+        p_u[g], p_m[g] = (raw, float(chi2.sf(t_m[g], max(marginal[g].shape[1], 1))))
+        nulls[g] = f"chi-square screen (p > {rules.surrogate_screen_p:g}: surrogates skipped)"
+        if min(p_u[g], p_m[g]) <= rules.surrogate_screen_p:
+            p_u[g], p_m[g], nulls[g] = _surrogates(w, g, others[g], t_u[g], t_m[g], sigma2, surrogate_group, rules, rng)
+    out = {}
+    for g in names:
+        level = level_dynamic if g in dynamic else level_column
+        norm = float(np.sum(w.prepare(groups[g]) ** 2))
+        whole = float(np.sum((whiten(w.rs, groups[g], w.ar)[w.keep] - groups[g][w.keep].mean(0)) ** 2)) or 1.0
+        out[g] = GroupTest(
+            g,
+            int(unique[g].shape[1]),
+            t_u[g],
+            float(p_u[g]),
+            t_m[g],
+            float(p_m[g]),
+            float(t_u[g] * sigma2 / float(e[:, 0] @ e[:, 0])),
+            norm / whole,
+            mde(int(unique[g].shape[1]), level, sigma2, n, w.to_units),
+            level,
+            nulls[g],
+        )
+    return out
+
+
+def _max_t(
+    w: Whitened,
+    dynamic: list[str],
+    marginal: dict[str, Matrix],
+    unique: dict[str, Matrix],
+    t_m: dict[str, float],
+    t_u: dict[str, float],
+    rules: Rules,
+    rng: np.random.Generator,
+) -> tuple[dict[str, float], dict[str, float]]:
+    """Single-step max-T adjusted p-values of the dynamic groups, unique and marginal: the larger
+    of the block bootstrap's (noise as the null) and the within-state permutation's (the
+    rate-independent structural error as the null, :mod:`host.diagnose.strata`)."""
+    e = w.residual
+    n = e.size
+    length = block_length(e)
+    strata = state_strata(w.rs, rules.strata_input_bins, rules.strata_turn_bins)[w.keep]
+    boot = _adjusted(
+        lambda count: e[stationary_draws(n, length, count, rng)], dynamic, marginal, unique, t_m, t_u, rules
+    )
+    perm = _adjusted(
+        lambda count: e[within_strata_permutations(strata, count, rng).T], dynamic, marginal, unique, t_m, t_u, rules
+    )
+    return (
+        {g: max(boot[0][g], perm[0][g]) for g in dynamic},
+        {g: max(boot[1][g], perm[1][g]) for g in dynamic},
+    )
+
+
+def _adjusted(
+    resample: Callable[[int], Matrix],
+    dynamic: list[str],
+    marginal: dict[str, Matrix],
+    unique: dict[str, Matrix],
+    t_m: dict[str, float],
+    t_u: dict[str, float],
+    rules: Rules,
+) -> tuple[dict[str, float], dict[str, float]]:
+    """Max-T adjusted p-values against residuals drawn by ``resample(count)`` (n x count)."""
+    n = next(iter(marginal.values())).shape[0] if marginal else 1
+    z_u = {g: [] for g in dynamic}  # type: dict[str, list[NDArray[np.float64]]]
+    z_m = {g: [] for g in dynamic}  # type: dict[str, list[NDArray[np.float64]]]
+    remaining = rules.bootstrap_draws
+    while remaining > 0:
+        chunk = min(remaining, max(1, 4_000_000 // n))
+        draws = resample(chunk)
+        sigma2 = np.mean(draws**2, axis=0)
+        for g in dynamic:
+            z_u[g].append(_z(_stat(unique[g], draws, sigma2), unique[g].shape[1]))
+            z_m[g].append(_z(_stat(marginal[g], draws, sigma2), marginal[g].shape[1]))
+        remaining -= chunk
+    if not dynamic:
+        return {}, {}
+    max_u = np.max([np.concatenate(z_u[g]) for g in dynamic], axis=0)
+    max_m = np.max([np.concatenate(z_m[g]) for g in dynamic], axis=0)
+    draws_total = max_u.size
+
+    def adjusted(maxima: NDArray[np.float64], stat: float, df: int) -> float:
+        return float((1 + np.sum(maxima >= _z(stat, df))) / (draws_total + 1))
+
+    p_u = {g: adjusted(max_u, t_u[g], unique[g].shape[1]) for g in dynamic}
+    p_m = {g: adjusted(max_m, t_m[g], marginal[g].shape[1]) for g in dynamic}
+    return p_u, p_m
+
+
+def column_copies(
+    rs: RunSet, values: NDArray[np.float64], count: int, rng: np.random.Generator
+) -> tuple[list[NDArray[np.float64]], str]:
+    """Surrogate copies of a measured column: its per-run values permuted across runs when it is
+    constant within every run (one load per run) and there are at least 4 runs; otherwise the whole
+    series circularly shifted by 10-90 % of its length, half of them mirrored in time."""
+    bounds = rs.bounds()
+    constant = all(np.ptp(values[a:b]) <= 1e-9 * (np.ptp(values) or 1.0) for a, b in bounds)
+    out = []
+    if constant and len(bounds) >= 4:
+        levels = np.array([values[a] for a, _ in bounds])
+        for _ in range(count):
+            perm = rng.permutation(levels)
+            out.append(np.concatenate([np.full(b - a, v) for (a, b), v in zip(bounds, perm)]))
+        return out, "its per-run values permuted across runs"
+    n = values.size
+    for i in range(count):
+        shift = int(rng.integers(int(0.1 * n), max(int(0.9 * n), int(0.1 * n) + 1)))
+        copy = np.roll(values, shift)
+        out.append(copy[::-1].copy() if i % 2 else copy)
+    return out, "circularly shifted and mirrored copies"
+
+
+def _surrogates(
+    w: Whitened,
+    g: str,
+    q_others: Matrix,
+    t_u: float,
+    t_m: float,
+    sigma2: float,
+    surrogate_group: Callable[[str, NDArray[np.float64]], Matrix],
+    rules: Rules,
+    rng: np.random.Generator,
+) -> tuple[float, float, str]:
+    column = CAUSES[g].column
+    assert column is not None
+    e = w.residual[:, None]
+    hits_u = hits_m = 0
+    copies, kind = column_copies(w.rs, w.rs.columns[column], rules.column_surrogates, rng)
+    for copy in copies:
+        partialled = w.prepare(surrogate_group(g, copy))
+        hits_m += float(_stat(orthonormal(partialled), e, sigma2)[0]) >= t_m
+        hits_u += float(_stat(orthonormal(partial_out(q_others, partialled)), e, sigma2)[0]) >= t_u
+    k = len(copies)
+    return (1 + hits_u) / (k + 1), (1 + hits_m) / (k + 1), f"{k} surrogate columns ({kind})"

@@ -1,0 +1,169 @@
+"""The baseline of diagnosis v3: what is *not* an effect, as a linear nuisance space.
+
+``M0``: rate-independent Preisach hysteresis (Everett nodes on a grid, ridge-regularised) after
+which one first-order output lag acts (the rig's mechanics, its time constant chosen from
+:attr:`host.diagnose.rules.Rules.output_lags_s`), plus the directions in which M0's own
+settings could move it: the lag's tangent, an input lead (a snubber on the pressure reading),
+a static output map (the square and cube of the hysteresis output). Nothing in it depends on
+the input's speed, on time, or on a measured column, so a timing or column effect keeps its own
+part. The AR model of M0's residual (order by BIC) whitens every statistic.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.signal import lfilter
+
+from host.diagnose.runs import RunSet
+
+
+def lowpass(x: NDArray[np.float64], dt: float, tau_s: float) -> NDArray[np.float64]:
+    """``x`` (1-D or column by column) through a unit-gain first-order lag of ``tau_s`` [s],
+    starting settled at its first sample (0: unchanged)."""
+    if tau_s <= 0:
+        return x
+    a = 1.0 - np.exp(-dt / tau_s)
+    return np.asarray(lfilter([a], [1.0, a - 1.0], x, axis=0, zi=x[:1] * (1 - a))[0])
+
+
+def run_lowpass(rs: RunSet, x: NDArray[np.float64], tau_s: float) -> NDArray[np.float64]:
+    """:func:`lowpass` restarted at each run."""
+    out = np.empty_like(x, dtype=np.float64)
+    for a, b in rs.bounds():
+        out[a:b] = lowpass(x[a:b], rs.dt, tau_s)
+    return out
+
+
+def run_gradient(rs: RunSet, x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Time derivative per run [units / s] (one-sided at each run's ends)."""
+    out = np.empty_like(x, dtype=np.float64)
+    for a, b in rs.bounds():
+        out[a:b] = np.gradient(x[a:b], rs.dt, axis=0) if b - a > 1 else 0.0
+    return out
+
+
+def ridge_fit(
+    design: NDArray[np.float64],
+    y: NDArray[np.float64],
+    smoothness: NDArray[np.float64],
+    strength: float,
+    tail_cols: int = 0,
+) -> NDArray[np.float64]:
+    """Penalised least squares: ``strength`` x the block's mean diagonal x ``smoothness`` (a
+    k x k matrix, D^T D of neighbouring-node differences) on the first k columns (the Preisach
+    nodes: smooth, so cells no training row visits take their neighbours' values), and a ridge
+    of ``strength`` on the last ``tail_cols`` (a cause's group: collinear with the nuisance's
+    lags, it must not cancel them in training and fail held out)."""
+    gram = design.T @ design
+    diag = np.diag(gram)
+    k = smoothness.shape[0]
+    penalty = np.diag(np.full(design.shape[1], 1e-10 * (float(diag.mean()) or 1.0)))
+    if k:
+        penalty[:k, :k] += strength * (float(diag[:k].mean()) or 1.0) * (smoothness + 1e-4 * np.eye(k))
+    if tail_cols:
+        penalty[-tail_cols:, -tail_cols:] += strength * (float(diag[-tail_cols:].mean()) or 1.0) * np.eye(tail_cols)
+    return np.asarray(np.linalg.solve(gram + penalty, design.T @ y))
+
+
+@dataclass
+class Baseline:
+    """M0 fitted to every row, and the nuisance columns the tests partial out."""
+
+    nuisance: NDArray[np.float64]  # n x p: lagged nodes, tangents, output map, constant
+    smoothness: NDArray[np.float64]  # D^T D over the first columns of ``nuisance`` (the Preisach nodes)
+    x: NDArray[np.float64]  # the hysteresis output (static, before the lag) [units of y]
+    prediction: NDArray[np.float64]  # M0's output on every row [units of y]
+    lag_s: float
+
+    @property
+    def residual_scale(self) -> float:
+        return float(np.std(self.prediction))
+
+
+def fit_baseline(
+    rs: RunSet,
+    nodes: NDArray[np.float64],
+    smoothness: NDArray[np.float64],
+    lags_s: tuple[float, ...],
+    ridge: float,
+    extra_lags_s: tuple[float, ...] = (),
+) -> Baseline:
+    """M0 (see module docstring): masses on the nodes, then the output lag by least squares on
+    the lagged hysteresis output, then the masses refitted through that lag (one alternation)."""
+    y = rs.y
+    ones = np.ones((y.size, 1))
+    theta = ridge_fit(np.hstack([nodes, ones]), y, smoothness, ridge)
+    x = nodes @ theta[:-1]
+
+    def lag_error(tau: float) -> float:
+        z = np.column_stack([run_lowpass(rs, x, tau), ones])
+        coef = np.linalg.lstsq(z, y, rcond=None)[0]
+        return float(np.sum((z @ coef - y) ** 2))
+
+    usable = [tau for tau in lags_s if tau == 0 or tau >= 0.5 * rs.dt]
+    lag = min(usable, key=lag_error)
+    lagged_nodes = run_lowpass(rs, nodes, lag)
+    theta = ridge_fit(np.hstack([lagged_nodes, ones]), y, smoothness, ridge)
+    x = nodes @ theta[:-1]
+    xc = (x - x.mean()) / (np.std(x) or 1.0)
+    lagged_x = run_lowpass(rs, x, lag)
+    slower = run_lowpass(rs, x, 1.5 * lag + rs.dt)
+    tangents = np.column_stack(
+        [
+            slower - lagged_x,  # a longer output lag
+            run_lowpass(rs, run_gradient(rs, x), lag) * rs.dt,  # an input lead (snubber on the reading)
+            run_lowpass(rs, xc**2, lag),  # the static output map
+            run_lowpass(rs, xc**3, lag),
+        ]
+        + [run_lowpass(rs, x, tau) - lagged_x for tau in extra_lags_s if tau != lag]
+    )
+    nuisance = np.hstack([lagged_nodes, tangents, ones])
+    coef = ridge_fit(nuisance, y, smoothness, ridge)
+    return Baseline(nuisance, smoothness, x, nuisance @ coef, lag)
+
+
+def ar_whitener(residual: NDArray[np.float64], max_order: int) -> NDArray[np.float64]:
+    """AR coefficients ``a`` (``e_k = sum a_i e_{k-i} + w_k``) of ``residual``, order 0..``max_order``
+    by BIC, fitted by least squares (stable by construction when the roots are checked)."""
+    n = residual.size
+    max_order = int(min(max_order, n // 20))
+    best = (n * np.log(float(np.var(residual)) or 1e-300), np.zeros(0))
+    if max_order < 1:
+        return best[1]
+    lagged = np.column_stack([np.r_[np.zeros(i), residual[: n - i]] for i in range(1, max_order + 1)])
+    target = residual[max_order:]
+    for p in range(1, max_order + 1):
+        z = lagged[max_order:, :p]
+        a = np.linalg.lstsq(z, target, rcond=None)[0]
+        if np.any(np.abs(np.roots(np.r_[1.0, -a])) >= 0.999):
+            continue
+        rss = float(np.sum((target - z @ a) ** 2))
+        bic = target.size * np.log(rss / target.size or 1e-300) + p * np.log(target.size)
+        if bic < best[0]:
+            best = (bic, a)
+    return best[1]
+
+
+def whiten(rs: RunSet, values: NDArray[np.float64], ar: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``values`` (1-D or columns) through ``1 - sum a_i q^-i``, restarted at each run."""
+    if ar.size == 0:
+        return values
+    out = np.empty_like(values, dtype=np.float64)
+    for a, b in rs.bounds():
+        seg = values[a:b]
+        # the filter starts as if the run's first value had been there for ever
+        zi_scale = np.cumsum(ar[::-1])[::-1]
+        zi = -np.outer(zi_scale, seg[0]) if seg.ndim > 1 else -zi_scale * seg[0]
+        out[a:b] = lfilter(np.r_[1.0, -ar], [1.0], seg, axis=0, zi=zi)[0]
+    return out
+
+
+def kept_rows(rs: RunSet, order: int) -> NDArray[np.bool_]:
+    """Rows a whitened statistic uses: each run without its first ``order`` samples."""
+    keep = np.ones(rs.y.size, dtype=bool)
+    for a, b in rs.bounds():
+        keep[a : min(b, a + order)] = False
+    return keep

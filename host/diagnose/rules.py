@@ -1,0 +1,133 @@
+"""The rules of diagnosis v3 in one place: the table of causes and one versioned rules object.
+
+Every threshold and grid the calibrated-test pipeline (:mod:`host.diagnose.v3`) uses is a field
+of :class:`Rules`, with one line of provenance each. A verdict's rules are read here; two rule
+versions are compared by passing two :class:`Rules` objects to the same pipeline.
+
+None of these values was fitted to a plant family: they are statistical conventions (alpha,
+resampling counts), physical ranges (time constants, dead times) or resource bounds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+
+@dataclass(frozen=True)
+class Cause:
+    """One row of the cause table: what it is, how it is tested and what separates it."""
+
+    name: str
+    kind: str  # "dynamic": regressors of the input history; "column": a measured column; "time": drift
+    column: str | None  # the measured column it needs (load, temperature), else None
+    meaning: str  # what the group of regressors stands for, in one sentence
+    to_record: str  # what to record to tell it from a rival
+
+
+CAUSES: dict[str, Cause] = {
+    c.name: c
+    for c in (
+        Cause(
+            "rate_dependence",
+            "dynamic",
+            None,
+            "loop width and stroke that change with the input speed: speed x branch, speed x output, "
+            "velocity-squared friction of the output, a slowly low-passed speed x branch",
+            "the same triangle at three speeds (e.g. 0.1, 0.5 and 2 cycles/s)",
+        ),
+        Cause(
+            "creep",
+            "dynamic",
+            None,
+            "slow relaxations of the hysteresis output on a log grid of time constants, either sign",
+            "holds of 10-60 s after steps of both signs",
+        ),
+        Cause(
+            "transport_delay",
+            "dynamic",
+            None,
+            "a dead time before the hysteresis: the output at shifted times beyond what one lag explains",
+            "fast steps with a fast pressure reading at the muscle's port",
+        ),
+        Cause(
+            "load_dependence",
+            "column",
+            "load",
+            "the load column through its level, its product with the output and branch, and its lags",
+            "the same protocol at three or more loads (one load per run is fine)",
+        ),
+        Cause(
+            "temperature_drift",
+            "column",
+            "temperature",
+            "the temperature column through its level, its product with the output and branch, and its lags",
+            "a temperature that changes independently of time (heat, then cool, then heat)",
+        ),
+        Cause(
+            "slow_drift",
+            "time",
+            None,
+            "smooth functions of time (splines) and their product with the output, no column explains",
+            "repeat the first protocol segment at the end of the record",
+        ),
+    )
+}
+
+
+@dataclass(frozen=True)
+class Rules:
+    """Every threshold of diagnosis v3 (one object, versioned: ``version`` names it)."""
+
+    version: str = "v3.0"
+    # one family-wise error rate per record over every cause tested (Westfall-Young max-T for the
+    # dynamic groups, surrogates for columns, split by Bonferroni between the two)
+    alpha: float = 0.05
+    # block-bootstrap draws of the whitened null residual: p resolution 1/500
+    bootstrap_draws: int = 499
+    # rate-independent state strata of the within-state permutation null: input quantile bins x
+    # direction of the last move x quantile bins of where the input last turned
+    strata_input_bins: int = 12
+    strata_turn_bins: int = 4
+    # surrogate copies of each measured column: p resolution 1/200
+    column_surrogates: int = 199
+    # a column whose chi-square p exceeds this cannot pass its surrogate test: the surrogates are skipped
+    surrogate_screen_p: float = 0.2
+    # Everett grid intervals of the rate-independent baseline and of its richer rung (robustness ladder)
+    preisach_levels: int = 16
+    richer_levels: int = 24
+    # ridge on the Preisach node weights, relative to the mean diagonal of the normal equations
+    node_ridge: float = 1e-3
+    # output lags tried for the baseline's linear dynamics [s]: the rig's mechanics (a first-order lag)
+    output_lags_s: tuple[float, ...] = (0.0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0)
+    # further output lags [s] whose directions join the nuisance (linear dynamics as a sum of lags)
+    nuisance_lags_s: tuple[float, ...] = (0.02, 0.1, 0.5)
+    # AR order bound of the residual's noise model (order by BIC)
+    max_ar_order: int = 20
+    # creep relaxations [s], log grid; only those shorter than half the record (or run) are used
+    creep_taus_s: tuple[float, ...] = (1.0, 3.0, 10.0, 30.0, 100.0)
+    # dead times tried [s]; at least 2 samples, at most 0.5 s (a valve line, not a hose of metres)
+    delays_s: tuple[float, ...] = (0.01, 0.02, 0.04, 0.08, 0.16, 0.32, 0.5)
+    min_delay_samples: int = 2
+    # thermal / load lags [s]
+    column_lags_s: tuple[float, ...] = (3.0, 10.0, 30.0)
+    # spline knots of the drift group (per record)
+    drift_knots: int = 5
+    # rows the linear algebra works on at most (block means above it, with a note)
+    max_rows: int = 8_000
+    # a run shorter than this many samples makes the folds leave whole runs out
+    short_run_samples: int = 600
+    # held-out folds: blocks in time (long records) or runs (short runs)
+    max_folds: int = 5
+    min_fold_samples: int = 100
+    # a cause whose unique test passes on the full record but fails with the richer baseline is the
+    # baseline's class, not a cause, when its statistic falls by more than this share
+    ladder_drop: float = 0.5
+    # rows a record needs at least
+    min_samples: int = 100
+    extra: dict[str, float] = field(default_factory=dict)
+
+    def as_json(self) -> dict[str, object]:
+        return asdict(self)
+
+
+RULES = Rules()

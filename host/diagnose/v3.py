@@ -1,0 +1,249 @@
+"""Diagnosis v3: calibrated conditional tests over one or more runs.
+
+prepare -> baseline -> score -> decide -> explain:
+
+1. prepare: the runs as one :class:`host.diagnose.runs.RunSet` and their Preisach rows;
+2. baseline: M0, the nuisance space that is not an effect (:mod:`host.diagnose.nuisance`);
+3. score: each cause's group tested conditionally on M0, marginal and unique, whitened and
+   calibrated per record (:mod:`host.diagnose.conditional`);
+4. decide: a cause is named when its unique test passes at its level (one family-wise alpha per
+   record); causes that pass only jointly are "cannot tell X from Y"; a named dynamic cause whose
+   statistic collapses with a richer rate-independent baseline is the baseline's class, not a
+   cause (the robustness ladder);
+5. explain: the held-out gain of the named extension (:mod:`host.diagnose.heldout`) and one
+   paragraph of reason.
+
+Every threshold is in :class:`host.diagnose.rules.Rules`.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+from threadpoolctl import threadpool_limits
+
+from host.data import Measurement
+from host.diagnose.conditional import GroupTest, group_tests, whitened
+from host.diagnose.groups import branch_of, cause_groups, column_group
+from host.diagnose.heldout import HeldOut, held_out, holdout_folds
+from host.diagnose.nuisance import Baseline, fit_baseline
+from host.diagnose.rules import CAUSES, RULES, Rules
+from host.diagnose.runs import RunSet, node_differences, preisach_nodes, run_set
+
+
+@dataclass
+class DiagnosisV3:
+    """What v3 found on a set of runs."""
+
+    cause: str  # a name of :data:`CAUSES` or "none"
+    also: list[str]
+    cannot_tell: list[str]
+    class_mismatch: bool
+    reason: str
+    tests: dict[str, GroupTest]
+    heldout: HeldOut | None
+    holdout: str
+    runset: RunSet
+    baseline: Baseline
+    extended_prediction: NDArray[np.float64] | None  # full-record fit of the extension
+    rules: Rules
+    notes: list[str] = field(default_factory=list)
+    not_confirmed: bool = False  # a cause passed its test on the record but not held out
+    rejected: list[str] = field(default_factory=list)  # passed on the record, failed the ladder or held out
+    seconds: float = 0.0
+    cpu_seconds: float = 0.0
+
+    @property
+    def gain(self) -> float:
+        return self.heldout.gain if self.heldout is not None and self.cause != "none" else 0.0
+
+    def as_json(self) -> dict[str, object]:
+        return {
+            "method": self.rules.version,
+            "cause": self.cause,
+            "gain": round(self.gain, 4),
+            "also": self.also,
+            "cannot_tell": self.cannot_tell,
+            "class_mismatch": self.class_mismatch,
+            "rejected": self.rejected,
+            "reason": self.reason,
+            "p_values": {g: round(t.unique_p, 6) for g, t in self.tests.items()},
+            "interval_90": [round(v, 4) for v in self.heldout.interval]
+            if self.heldout is not None and self.cause != "none"
+            else None,
+            # the named cause's held-out comparison, or the first candidate's that held-out data rejected
+            "heldout": {"of": self.cause if self.cause != "none" else self.rejected[0], **self.heldout.as_json()}
+            if self.heldout is not None and (self.cause != "none" or self.rejected)
+            else None,
+            "holdout": self.holdout,
+            "evidence": {g: t.as_json() for g, t in self.tests.items()},
+            "baseline": {
+                "output_lag_s": round(self.baseline.lag_s, 6),
+                "nuisance_columns": self.baseline.nuisance.shape[1],
+            },
+            "runs": self.runset.names,
+            "samples": int(self.runset.y.size),
+            "rules": self.rules.as_json(),
+            "notes": self.notes,
+        }
+
+
+def _say(enabled: bool, text: str) -> None:
+    if enabled:
+        print(text, file=sys.stderr, flush=True)
+
+
+def score(
+    rs: RunSet, levels: int, rules: Rules, seed: int
+) -> tuple[Baseline, dict[str, NDArray[np.float64]], dict[str, GroupTest], list[str]]:
+    """Baseline at ``levels`` and every cause's tests."""
+    nodes, notes = preisach_nodes(rs, levels)
+    smooth = node_differences(levels)
+    base = fit_baseline(rs, nodes, smooth.T @ smooth, rules.output_lags_s, rules.node_ridge, rules.nuisance_lags_s)
+    groups = cause_groups(rs, base, rules)
+    w = whitened(rs, base, rules)
+    branch = branch_of(rs)
+
+    def surrogate(cause: str, copy: NDArray[np.float64]) -> NDArray[np.float64]:
+        return column_group(rs, base, copy, rules, branch)
+
+    tests = group_tests(w, groups, rules, surrogate, np.random.default_rng(seed))
+    return base, groups, tests, notes
+
+
+def decide(tests: dict[str, GroupTest]) -> tuple[list[str], list[str]]:
+    """(candidates, cannot_tell): the causes whose unique test passes at their level, the largest
+    unique share first (a physical cause before ``slow_drift``); or, when none does, the one cause
+    significant beyond the baseline alone; else those significant only jointly (cannot tell)."""
+    unique = [g for g, t in tests.items() if t.unique_p <= t.level]
+    if unique:
+        return sorted(unique, key=lambda g: (g == "slow_drift", -tests[g].unique_share)), []
+    joint = [g for g, t in tests.items() if t.marginal_p <= t.level]
+    if len(joint) == 1:
+        return joint, []
+    return [], sorted(joint, key=lambda g: tests[g].marginal_p)
+
+
+def diagnose_runs(
+    runs: list[Measurement], *, rules: Rules = RULES, progress: bool = False, seed: int = 0
+) -> DiagnosisV3:
+    """Diagnose one or more runs of one rig together (see module docstring)."""
+    wall, cpu = time.perf_counter(), time.process_time()
+    rs = run_set(runs, rules.max_rows, rules.min_samples)
+    threads = 1 if rs.y.size < 15_000 else 2
+    with threadpool_limits(limits=threads):
+        _say(progress, f"diagnose v3: {rs.n_runs} run(s), {rs.y.size} samples: baseline and tests ...")
+        base, groups, tests, notes = score(rs, rules.preisach_levels, rules, seed)
+        ranked, cannot_tell = decide(tests)
+        masks, holdout = holdout_folds(rs, rules)
+        richer: dict[str, GroupTest] | None = None
+        cause, class_mismatch, not_confirmed = "none", False, False
+        result_heldout: HeldOut | None = None
+        rejected: list[str] = []
+        for candidate in ranked:  # the largest unique share first; the first confirmed is named
+            if CAUSES[candidate].kind == "dynamic":
+                if richer is None:
+                    _say(progress, "diagnose v3: checking the dynamic causes against a richer baseline ...")
+                    richer = score(rs, rules.richer_levels, rules, seed + 1)[2]
+                r = richer[candidate]
+                if r.unique_p > r.level and r.unique_stat < (1 - rules.ladder_drop) * tests[candidate].unique_stat:
+                    class_mismatch = class_mismatch or not rejected
+                    rejected.append(candidate)
+                    continue
+            _say(progress, f"diagnose v3: held-out gain of {candidate} over {len(masks)} folds ...")
+            column = CAUSES[candidate].column
+            trial = held_out(
+                rs,
+                base.nuisance,
+                base.smoothness,
+                groups[candidate],
+                masks,
+                rules.node_ridge,
+                np.random.default_rng(seed),
+                rs.columns.get(column) if column else None,
+            )
+            # nested confirmation: the extension must predict rows it was not fitted on
+            if trial.clark_west_p <= rules.alpha and trial.interval[0] > 0.0:
+                cause, result_heldout, class_mismatch, not_confirmed = candidate, trial, False, False
+                break
+            if not rejected:
+                result_heldout, not_confirmed = trial, True
+            rejected.append(candidate)
+    also = [g for g in ranked if g != cause and g not in rejected] if cause != "none" else []
+    first = rejected[0] if rejected else "none"
+    out = DiagnosisV3(
+        cause,
+        also,
+        cannot_tell,
+        class_mismatch and cause == "none",
+        "",
+        tests,
+        result_heldout,
+        holdout,
+        rs,
+        base,
+        result_heldout.ext_prediction if result_heldout is not None and cause != "none" else None,
+        rules,
+        rs.notes + notes,
+        not_confirmed=not_confirmed and cause == "none",
+        rejected=rejected,
+    )
+    out.reason = explain(out, first)
+    out.seconds, out.cpu_seconds = time.perf_counter() - wall, time.process_time() - cpu
+    return out
+
+
+def explain(d: DiagnosisV3, tested: str) -> str:
+    """The reason in one paragraph."""
+    t = d.tests
+    if d.class_mismatch:
+        return (
+            f"{tested} passed its unique test (p = {t[tested].unique_p:.2g}) with the {d.rules.preisach_levels}-level "
+            f"baseline but faded with a {d.rules.richer_levels}-level one: the rate-independent baseline's class does "
+            "not fit this record, which is not a cause; identify a richer hysteresis model before diagnosing"
+        )
+    if d.not_confirmed and d.heldout is not None:
+        h = d.heldout
+        return (
+            f"{tested} passed its test on the whole record (p = {t[tested].unique_p:.2g}) but does not predict "
+            f"held-out data ({h.gain:+.1%}, 90 % interval {h.interval[0]:+.1%} to {h.interval[1]:+.1%}, Clark-West "
+            f"p = {h.clark_west_p:.2g}): the baseline misses something that this cause's regressors fit only in-sample "
+            "(a structural misfit of the hysteresis, most likely); no cause is named"
+        )
+    if d.cause != "none":
+        g = t[d.cause]
+        hv = d.heldout
+        held = (
+            f"; held out, the extension lowers the RMS error from {hv.base_rmse:.3g} to {hv.ext_rmse:.3g} "
+            f"({hv.gain:.1%}, 90 % interval {hv.interval[0]:.1%} to {hv.interval[1]:.1%}; "
+            f"Clark-West p = {hv.clark_west_p:.2g})"
+            if hv
+            else ""
+        )
+        also = f"; also significant on its own (not checked held out): {', '.join(d.also)}" if d.also else ""
+        if d.rejected:
+            also += f"; passed on the record but failed held out or with a richer baseline: {', '.join(d.rejected)}"
+        return (
+            f"{d.cause}: its own regressors ({CAUSES[d.cause].meaning}) explain {g.unique_share:.1%} of the whitened "
+            f"residual beyond the baseline and every other cause (p = {g.unique_p:.2g} at level {g.level:.3g}, "
+            f"{g.null}){held}{also}"
+        )
+    if d.cannot_tell:
+        names = " and ".join(d.cannot_tell)
+        record = "; ".join(f"for {c}: {CAUSES[c].to_record}" for c in d.cannot_tell)
+        return (
+            f"cannot tell {names} apart: together they explain what the baseline misses, but none does on its own "
+            f"(each needs the others' directions); record what separates them ({record})"
+        )
+    smallest = min(t.values(), key=lambda g: g.mde) if t else None
+    detect = (
+        f"; on this record an effect would need an own part of about {smallest.mde:.3g} RMS in y's units "
+        f"({smallest.name}, the most sensitive test) to be found with 80 % power"
+        if smallest
+        else ""
+    )
+    return f"no cause passes its test at family-wise alpha {d.rules.alpha:g}{detect}; smaller effects may be present"
