@@ -2,7 +2,7 @@
 
 Usage: python bench/diagnose_injected.py [--data ../shared/data] [--only TEXT] [--json OUT] [--dry-run]
 
-The records come from :mod:`tests.plants.injected_real`: ten real base records (five piezo runs,
+The records come from :mod:`bench.plants.injected_real`: ten real base records (five piezo runs,
 five joined pneumatic-muscle campaigns) from ``../shared/data``, each as measured and with each
 effect injected. Prints one line per record (case, verdict, held-out gain, margin, CPU seconds,
 which evidence decided), then a table of injected effects named / total per effect and per kind of

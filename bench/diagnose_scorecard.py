@@ -6,18 +6,18 @@ Usage: python bench/diagnose_scorecard.py [--set tuning|fresh|blind|blind2|...|b
 Prints one line per record (plant, effect:form, protocol, rate, verdict, confidence, held-out
 gain, CPU seconds) and a table per set: effects named / missed per plant and effect, false alarms
 on the effect-free records, median held-out gain when named, which evidence decided. The tuning
-set (tests/plants/family.py: Bouc-Wen, generalised play, friction-spring, HIL) is what the method
-and its constants were chosen on; the fresh set (tests/plants/fresh_family.py: four other cores,
+set (bench/plants/family.py: Bouc-Wen, generalised play, friction-spring, HIL) is what the method
+and its constants were chosen on; the fresh set (bench/plants/fresh_family.py: four other cores,
 other effect forms, protocols and rates) was built separately and is only reported. The blind
-set (tests/plants/blind_family.py: four more cores, forms, protocols and rates) was built without
+set (bench/plants/blind_family.py: four more cores, forms, protocols and rates) was built without
 looking at the method, to be scored once; it has been scored three times and was replaced by
-blind2 (tests/plants/blind2_family.py: four more cores, forms, protocols and rates, built blind
+blind2 (bench/plants/blind2_family.py: four more cores, forms, protocols and rates, built blind
 too), scored once for v6 and then used with the others to calibrate v7's gain floor; blind3
-(tests/plants/blind3_family.py, built blind for v7) is the set v7 was scored on once, and
-blind4 (tests/plants/blind4_family.py, built blind for v8) the set v8 was scored on once, and
-blind5 and blind6 (tests/plants/blind5_family.py, blind6_family.py, built blind for v9) the sets
+(bench/plants/blind3_family.py, built blind for v7) is the set v7 was scored on once, and
+blind4 (bench/plants/blind4_family.py, built blind for v8) the set v8 was scored on once, and
+blind5 and blind6 (bench/plants/blind5_family.py, blind6_family.py, built blind for v9) the sets
 v9 was scored on once each (blind5 before v9's thermal-lag terms, blind6 after), and blind7
-(tests/plants/blind7_family.py, built blind for v10) the set v10 was scored on once, blind8
+(bench/plants/blind7_family.py, built blind for v10) the set v10 was scored on once, blind8
 (built blind for v11) the set v11 was scored on once, blind9 (built blind for v12) the set
 v12 was scored on once (v12 kept v11's method), blind10 (built blind for v13) the set v13
 was scored on once, and blind11 (built blind for v14) the set v14 was scored on once.

@@ -1,6 +1,6 @@
 """pmactl diagnose in the default run: the decision rule on fold scores, the CLI contract, refusals.
 
-Whole diagnoses on the plant family (tuning and held-out plants, tests/plants) are the slow
+Whole diagnoses on the plant family (tuning and held-out plants, bench/plants) are the slow
 scorecard: tests/test_diagnose_family.py (``-m slow``) and bench/diagnose_scorecard.py.
 """
 

@@ -1,22 +1,22 @@
 """The plant-family scorecards (slow): effects named on the tuning plants and on plants never tuned on.
 
-``tests/plants/family.py`` holds the tuning plants (Bouc-Wen, generalised play, friction +
-spring, the HIL); ``tests/plants/fresh_family.py`` the first held-out set (four other cores, other
+``bench/plants/family.py`` holds the tuning plants (Bouc-Wen, generalised play, friction +
+spring, the HIL); ``bench/plants/fresh_family.py`` the first held-out set (four other cores, other
 effect forms, protocols and rates), built separately; its verdicts were read while the method
-was changed after v4, so it is no longer blind. ``tests/plants/blind_family.py`` is the third set
+was changed after v4, so it is no longer blind. ``bench/plants/blind_family.py`` is the third set
 (four more cores, new forms, protocols and rates), built blind and scored three times, never to
-choose between variants; ``tests/plants/blind2_family.py`` the fourth, built blind for v6 and
+choose between variants; ``bench/plants/blind2_family.py`` the fourth, built blind for v6 and
 scored once, at its end, then used with the other three to calibrate v7's gain floor;
-``tests/plants/blind3_family.py`` the fifth, built blind for v7 and scored once, at its end;
-``tests/plants/blind4_family.py`` the sixth, built blind for v8 and scored once, at its end;
-``tests/plants/blind5_family.py`` the seventh and ``tests/plants/blind6_family.py`` the eighth,
+``bench/plants/blind3_family.py`` the fifth, built blind for v7 and scored once, at its end;
+``bench/plants/blind4_family.py`` the sixth, built blind for v8 and scored once, at its end;
+``bench/plants/blind5_family.py`` the seventh and ``bench/plants/blind6_family.py`` the eighth,
 built blind for v9 and scored once each (blind5 before v9's thermal-lag terms, blind6 after);
-``tests/plants/blind7_family.py`` the ninth, built blind for v10 and scored once, at its end
+``bench/plants/blind7_family.py`` the ninth, built blind for v10 and scored once, at its end
 (its report was read before v11, whose 3 s thermal lag answers one of its forms);
-``tests/plants/blind8_family.py`` the tenth, built blind for v11 and scored once, at its end;
-``tests/plants/blind9_family.py`` the eleventh, built blind for v12 and scored once, at its end;
-``tests/plants/blind10_family.py`` the twelfth, built blind for v13 and scored once, at its end;
-``tests/plants/blind11_family.py`` the thirteenth, built blind for v14 and scored once, at its end.
+``bench/plants/blind8_family.py`` the tenth, built blind for v11 and scored once, at its end;
+``bench/plants/blind9_family.py`` the eleventh, built blind for v12 and scored once, at its end;
+``bench/plants/blind10_family.py`` the twelfth, built blind for v13 and scored once, at its end;
+``bench/plants/blind11_family.py`` the thirteenth, built blind for v14 and scored once, at its end.
 The targets are the
 issue's, on the held-out set: at least 90 % of the effects named, at most 1 false alarm in 10
 effect-free records. ``python bench/diagnose_scorecard.py`` prints the same tables with every verdict.

@@ -3,7 +3,7 @@ left of the baseline's actuator lag beside a dead time (unit checks), a dead tim
 samples of a fast record; and two rate effects no rate form fits (known misses): a viscoelastic
 branch (a standard linear solid) and a drag that saturates with speed.
 
-Each plant is the plain pulse-driven muscle of :mod:`tests.plants.pulses` with one effect added;
+Each plant is the plain pulse-driven muscle of :mod:`bench.plants.pulses` with one effect added;
 what is checked is the verdict and the form found, not a gain.
 """
 

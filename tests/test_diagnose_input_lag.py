@@ -35,7 +35,7 @@ def test_leads_shorter_than_half_a_sample_are_not_tried():
 
 
 def _pulses(snubber_s: float) -> Measurement:
-    """The pulse-driven muscle (:mod:`tests.plants.pulses`) at 250 Hz for 80 s, its pressure
+    """The pulse-driven muscle (:mod:`bench.plants.pulses`) at 250 Hz for 80 s, its pressure
     recorded through a transducer lag of ``snubber_s``."""
     dt, pressure = pulse_pressure(250.0, 80.0)
     rng = np.random.default_rng(3)

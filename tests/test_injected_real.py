@@ -1,4 +1,4 @@
-"""Properties of the injected-real scoring set (tests/plants/injected_real.py), never the diagnosis.
+"""Properties of the injected-real scoring set (bench/plants/injected_real.py), never the diagnosis.
 
 Every record is checked against its un-injected twin (the ``none`` record of the same base): the
 difference must be the named effect, rebuilt here independently on the final grid from the truth's

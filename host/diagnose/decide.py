@@ -38,7 +38,7 @@ term: when another candidate or yardstick comes within :data:`DISTINCT_MARGIN` o
 gain, the verdict is ``none`` ("cannot tell X from Y"), with both gains and what to record to
 separate them. A cause that explains the error no better than another is a guess.
 
-The constants were calibrated on the effect-free records of the tuning plants (tests/plants:
+The constants were calibrated on the effect-free records of the tuning plants (bench/plants:
 Bouc-Wen, generalised play, friction-spring and the HIL; ``bench/diagnose_scorecard.py --set
 tuning``) and, from v7, of all four plant families (tuning, fresh, blind, blind2: 80 effect-free
 records); the false-alarm rate on a family none of them was calibrated on (``--set blind3``) is
