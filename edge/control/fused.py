@@ -65,19 +65,24 @@ class FusedMLP:
         # layer i reads buffer i = [activations, 1] and writes the first rows of buffer i + 1
         self._buffers = [np.ones(w.shape[1] + 1, F32) for w, _ in folded] + [np.ones(folded[-1][0].shape[0], F32)]
         self._matrices = [np.ascontiguousarray(np.column_stack([w, b]), F32) for w, b in folded]
-        self._views = [self._buffers[i + 1][: w.shape[0]] for i, (w, _) in enumerate(folded)]
-        self._input = self._buffers[0][:n_in]
+        views = [self._buffers[i + 1][: w.shape[0]] for i, (w, _) in enumerate(folded)]
+        # (matrix, source buffer, target view, tanh after?) per layer, unrolled once here
+        self._plan = [(m, self._buffers[i], views[i], i < len(folded) - 1) for i, m in enumerate(self._matrices)]
+        self._output = views[-1]
+        self._input = self._buffers[0]
+        self._columns = range(n_in)
         self.n_inputs = n_in
 
     def step(self, x: Sequence[float] | NDArray[np.floating]) -> float:
         """The output for one input vector (float32 arithmetic)."""
-        self._input[:] = x
-        last = len(self._matrices) - 1
-        for i, (matrix, view) in enumerate(zip(self._matrices, self._views)):
-            np.dot(matrix, self._buffers[i], out=view)
-            if i < last:
-                np.tanh(view, out=view)
-        return float(self._views[-1][0])
+        buffer = self._input
+        for i in self._columns:  # element-wise: cheaper than converting a short list
+            buffer[i] = x[i]
+        for matrix, source, target, activate in self._plan:
+            np.dot(matrix, source, out=target)
+            if activate:
+                np.tanh(target, out=target)
+        return float(self._output[0])
 
 
 class FusedNarmax:

@@ -124,7 +124,9 @@ class NeuralCorrection:
         return choice
 
     def _onnx_step(self, x: Sequence[float]) -> float:
-        self._x[0] = x
+        row = self._x[0]
+        for column in range(row.size):
+            row[column] = x[column]
         self._session.run_with_iobinding(self._binding)
         if self.state_names:
             np.copyto(self._h_in, self._h_out)
