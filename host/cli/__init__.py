@@ -132,6 +132,7 @@ def build_parser() -> argparse.ArgumentParser:
     importlib.import_module("host.cli.sweep").register(sub)
     importlib.import_module("host.cli.identify").register(sub)
     importlib.import_module("host.cli.train").register(sub)
+    importlib.import_module("host.cli.simulate").register(sub)
     importlib.import_module("host.cli.quantise").register(sub)
     return parser
 
