@@ -84,7 +84,7 @@ def compressed_branch_problem(
         gained_sum, lost_sum = gained[-1], lost[-1]
         block = np.column_stack([gained, -lost, np.ones(len(fills)), y[row : row + len(fills)]])
         row += len(fills)
-        factor = np.linalg.qr(np.vstack([factor, block]), mode="r")
+        factor = np.asarray(np.linalg.qr(np.vstack([factor, block]), mode="r"), dtype=np.float64)
     factor = factor[:width]
     return factor[:, :width], factor[:, width]
 
