@@ -103,3 +103,15 @@ def test_bad_input_is_one_line_and_exit_2_and_keeps_the_users_files(bundle, tmp_
     assert len(err.splitlines()) == 1
     assert pytest.importorskip("re").search(message, err)
     assert (out.read_text() == "precious\n") if case == "out_exists" else not out.exists()
+
+
+def test_a_trained_hammerstein_runs_in_onnxruntime_as_it_did_after_training(tmp_path, capsys):
+    record = load_measurement(hil_csv(tmp_path, "sines", 1, 40.0, "rate_dependence"))
+    trained = train_model("hammerstein", [record], seed=0, epochs=5)
+    save_model(trained, tmp_path / "ham", {"model": "hammerstein"})
+    held_out = hil_csv(tmp_path, "sines", 2, 40.0, "rate_dependence")
+    out = tmp_path / "p.csv"
+    assert main(["simulate", str(tmp_path / "ham"), str(held_out), "--out", str(out), "--initial", "ascending"]) == 0
+    expected = trained.model.simulate(load_measurement(held_out).u, "ascending")
+    assert np.max(np.abs(read(out)["y_model"] - expected)) <= 1e-4 * np.ptp(expected)
+    assert "via onnxruntime" in capsys.readouterr().out
