@@ -1,6 +1,7 @@
 """Neural hysteresis models: seed 001 Table 1 on HIL and real data, step latency, closed loop.
 
-Usage: python bench/neural_bench.py [--data ../shared/data] [--epochs 150] [--only tables|latency|loop|tick]
+Usage: python bench/neural_bench.py [--data ../shared/data] [--epochs 150] [--only tables|latency|loop|tick|trainer]
+       python bench/neural_bench.py --only trainer --before DIR [--seeds 0 1]
 
 1. Table 1 (RMSE, MAXE % of p-p, MAE, ms per free run) of PI, MPI, Preisach, Hammerstein and
    LSTM-NARMAX, every test scored after its calibration window (host/evaluate.py):
@@ -13,6 +14,10 @@ Usage: python bench/neural_bench.py [--data ../shared/data] [--epochs 150] [--on
 3. Closed loop on the HIL through ``pmactl edge run``: PID, PID + feedforward, PID +
    feedforward + trained correction, on seed 000's sine and seed 002's amplitude ramp.
 4. Whole-tick compute with that correction (bench/edge_bench.py's breakdown).
+5. ``--only trainer``: LSTM-NARMAX on the real piezo's 40 000-sample ``20_hz_no_lp`` record, CPU
+   and wall time of ``train_model`` and the held-out error on the six validation runs, for this
+   source and, with ``--before DIR`` (an older source tree, e.g. ``git archive 5690bbc | tar -x
+   -C DIR``), for that one, alternating per seed in child processes of this one run.
 """
 
 from __future__ import annotations
@@ -338,12 +343,70 @@ def tick_compute(scratch: Path) -> None:
     edge_bench.breakdown(bundle)
 
 
+TRAINER_JOB = """
+import json, sys, time
+from pathlib import Path
+import numpy as np
+from host.data import load_measurement
+from host.train import score_model, train_model
+piezo, seed, epochs = Path(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])
+train = load_measurement(piezo / "20_hz_no_lp.csv")
+tests = [load_measurement(piezo / f"{name}.csv") for name in sys.argv[4:]]
+wall, cpu = time.perf_counter(), time.process_time()
+trained = train_model("lstm-narmax", [train], seed=seed, epochs=epochs)
+wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+scores = [s.prediction.score for s in score_model(trained.model, tests)]
+print(json.dumps({"wall": wall, "cpu": cpu, "pct_pp": float(np.mean([s.rmse_pct_pp for s in scores])),
+                  "rmse": float(np.mean([s.rmse for s in scores])), "epochs": len(trained.model.curve.rows)}))
+"""
+
+
+def trainer(data: Path, epochs: int, before: Path | None, seeds: list[int]) -> None:
+    """Old and new trainer side by side (see module docstring, item 5)."""
+    import os
+
+    piezo = data / "piezo_dspace"
+    if not (piezo / "20_hz_no_lp.csv").is_file():
+        print(f"\n(no piezo record under {piezo}: trainer comparison skipped)")
+        return
+    sources = {"this source": HERE.parent, **({"before": before} if before else {})}
+    rows: dict[str, list[dict[str, float]]] = {name: [] for name in sources}
+    for seed in seeds:
+        for name, root in sources.items():
+            env = {**os.environ, "PYTHONPATH": str(root)}
+            out = subprocess.run(
+                [sys.executable, "-c", TRAINER_JOB, str(piezo), str(seed), str(epochs), *PIEZO_RUNS],
+                check=True, capture_output=True, text=True, env=env, cwd=root,
+            ).stdout  # fmt: skip
+            rows[name].append(json.loads(out.strip().splitlines()[-1]))
+    print(f"\n**LSTM-NARMAX training on the piezo's 20_hz_no_lp (40 000 samples), --epochs {epochs}, seeds {seeds}**\n")
+    print(
+        "| source | seed | train CPU [s] | train wall [s] | epochs run | held-out RMSE [um] | held-out RMSE [% p-p] |"
+    )
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    for name, results in rows.items():
+        for seed, r in zip(seeds, results):
+            cells = f"{r['cpu']:.1f} | {r['wall']:.1f} | {r['epochs']:.0f} | {r['rmse']:.4f} | {r['pct_pp']:.3f}"
+            print(f"| {name} | {seed} | {cells} |")
+    if before:
+        mean = lambda name, key: float(np.mean([r[key] for r in rows[name]]))  # noqa: E731
+        print(
+            f"\nCPU ratio before / this source: {mean('before', 'cpu') / mean('this source', 'cpu'):.1f}x; "
+            f"held-out % p-p {mean('before', 'pct_pp'):.3f} -> {mean('this source', 'pct_pp'):.3f} (mean over seeds)"
+        )
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=HERE.parent.parent / "shared" / "data")
     parser.add_argument("--epochs", type=int, default=150, help="LSTM-NARMAX epochs (Hammerstein: 60)")
-    parser.add_argument("--only", choices=["tables", "latency", "loop", "tick"])
+    parser.add_argument("--only", choices=["tables", "latency", "loop", "tick", "trainer"])
+    parser.add_argument("--before", type=Path, help="trainer: an older source tree to compare with (see item 5)")
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1], help="trainer: seeds (default 0 1)")
     args = parser.parse_args()
+    if args.only == "trainer":
+        trainer(args.data.resolve(), args.epochs, args.before.resolve() if args.before else None, args.seeds)
+        return 0
     with tempfile.TemporaryDirectory() as scratch_dir:
         scratch = Path(scratch_dir)
         if args.only in (None, "tables"):

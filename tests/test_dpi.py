@@ -206,3 +206,30 @@ def test_a_table_written_before_the_turning_point_was_stored_runs_the_same_model
         del old.arrays[key]
     u = random_walk(rng, 500, lo, hi, 0.2 * (hi - lo))
     np.testing.assert_allclose(CompiledModel(old).simulate(u), CompiledModel(table).simulate(u), atol=1e-9)
+
+
+def test_the_blockwise_branch_problem_is_the_full_least_squares_problem():
+    from host.identify.common import MemoryStart
+    from host.identify.dpi import CHUNK_ROWS, branch_regressors, compressed_branch_problem, digit_fills
+
+    rng = np.random.default_rng(7)
+    u = np.cumsum(rng.normal(0, 0.05, 2 * CHUNK_ROWS + 123))  # three blocks, the last one short
+    y = np.tanh(u) + rng.normal(0, 0.01, u.size)
+    n, start = 6, MemoryStart(40, "descending")
+    dx = float(np.ptp(u)) / n
+    gained, lost = branch_regressors(digit_fills(u, dx, n, start))
+    design = np.column_stack([gained, -lost, np.ones(len(gained))])
+    factor, projected = compressed_branch_problem(u, y, dx, n, start)
+    target = y[start.index :]
+    assert np.allclose(factor.T @ factor, design.T @ design, rtol=1e-9, atol=1e-6)
+    assert np.allclose(factor.T @ projected, design.T @ target, rtol=1e-9, atol=1e-6)
+
+
+@pytest.mark.slow
+def test_dpi_converges_on_a_100k_sample_recording_where_slsqp_stalled(tmp_path):
+    from hil.record import record
+
+    recording = record("sines", 1, 1000.0, effect="rate_dependence")  # failed with "did not converge"
+    estimator = DPIEstimator().fit(recording.u, recording.y)
+    residual = estimator.train_prediction_ - recording.y[estimator.start_index_ :]
+    assert np.sqrt(np.mean(residual**2)) < 0.1 * np.ptp(recording.y)

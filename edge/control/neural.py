@@ -12,16 +12,23 @@ output float32 ``[1, 1]`` in bar, the optional recurrent state float32 ``[1, siz
 fed back as the next tick's input and zeroed on re-arm. The session is checked against this
 description when it is opened, and refused with the mismatch named. One session, one thread,
 I/O bound to preallocated arrays (no allocation per tick), warmed up before the loop starts.
+
+A stateless net that is a chain of affine layers and tanh is also compiled, from the same
+verified file, into a fused numpy step (:mod:`edge.control.fused_graph`); it runs the ticks
+only if it reproduces the session on probe inputs and is faster on this machine
+(:attr:`NeuralCorrection.choice` records which evaluator runs, why, and the timings).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
+from edge.control.fused_graph import Choice, choose, mlp_from_graph
+from edge.control.onnx_graph import GraphFormatError, read_graph
 from edge.errors import BundleError
 
 FEATURES = (
@@ -33,6 +40,7 @@ FEATURES = (
     "previous_command_bar",
 )
 WARMUP_RUNS = 200
+PROBES = 200  # parity probes: normal inputs at scales 1, 10 and 100 (features are in mm, bar, mm/s)
 
 
 def _shape_matches(declared: list[object], expected: tuple[int, ...]) -> bool:
@@ -95,6 +103,34 @@ class NeuralCorrection:
             self._binding.bind_ortvalue_input(self.state_names[0], value(self._h_in))
             self._binding.bind_ortvalue_output(self.state_names[1], value(self._h_out))
         self._warm_up()
+        self._fused_step = self._fused_or_none(state_size)
+        self.choice = self._choose()
+
+    def _fused_or_none(self, state_size: int) -> Callable[[Sequence[float]], float] | None:
+        if state_size:
+            return None  # recurrent corrections run in onnxruntime (no fused form of a generic cell)
+        try:
+            return mlp_from_graph(read_graph(self.path), self.input_name, self.output_name, len(self.features)).step
+        except GraphFormatError:
+            return None
+
+    def _choose(self) -> Choice:
+        rng = np.random.default_rng(0)
+        n = len(self.features)
+        probes = (rng.normal(0.0, 1.0, (PROBES, n)) * 10.0 ** rng.integers(0, 3, (PROBES, 1))).tolist()
+        choice = choose(self._onnx_step, self._fused_step, probes, self.reset)
+        if choice.evaluator != "numpy-fused":
+            self._fused_step = None
+        return choice
+
+    def _onnx_step(self, x: Sequence[float]) -> float:
+        row = self._x[0]
+        for column in range(row.size):
+            row[column] = x[column]
+        self._session.run_with_iobinding(self._binding)
+        if self.state_names:
+            np.copyto(self._h_in, self._h_out)
+        return float(self._y[0, 0])
 
     def _check_signature(self) -> None:
         declared_in = {i.name: i for i in self._session.get_inputs()}
@@ -136,11 +172,6 @@ class NeuralCorrection:
 
     def step(self, values: tuple[float, ...]) -> float:
         """Correction [bar] for this tick; ``values`` in :data:`FEATURES` order."""
-        x = self._x[0]
-        for column, index in enumerate(self._feature_index):
-            x[column] = values[index]
-        self._session.run_with_iobinding(self._binding)
-        if self.state_names:
-            np.copyto(self._h_in, self._h_out)
-        result = float(self._y[0, 0])
+        x = [values[index] for index in self._feature_index]
+        result = self._fused_step(x) if self._fused_step is not None else self._onnx_step(x)
         return result if math.isfinite(result) else math.nan

@@ -37,6 +37,7 @@ COMMAND_MODULES = (
     "host.cli.identify",
     "host.cli.train",
     "host.cli.quantise",
+    "host.cli.simulate",
 )
 
 

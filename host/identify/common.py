@@ -61,13 +61,40 @@ def training_signals(
     return u_arr, y_arr
 
 
+COMPRESS_FACTOR = 4  # rows per column beyond which bounded_lsq solves the triangular factor
+COMPRESS_BLOCK = 65_536  # rows factored at a time: a few MB whatever the record length
+
+
+def compress_rows(
+    design: NDArray[np.float64], target: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(R, r)`` with ``|R x - r|^2 = |design x - target|^2 - const`` for every ``x``.
+
+    QR of ``[design, target]`` accumulated block by block (the previous factor stacked on the
+    next rows), so no copy of the whole design is made: at 1e6 samples the bounded solver's own
+    copies of the design took ``pmactl fit --model mpi`` to 1.27 GB.
+    """
+    width = design.shape[1]
+    factor = np.zeros((0, width + 1))
+    for first in range(0, design.shape[0], COMPRESS_BLOCK):
+        block = np.column_stack([design[first : first + COMPRESS_BLOCK], target[first : first + COMPRESS_BLOCK]])
+        factor = np.asarray(np.linalg.qr(np.vstack([factor, block]), mode="r"), dtype=np.float64)
+    return factor[:width, :width], factor[:width, width]
+
+
 def bounded_lsq(
     design: NDArray[np.float64],
     target: NDArray[np.float64],
     lower: NDArray[np.float64],
     upper: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
-    """``argmin |design @ x - target|`` subject to ``lower <= x <= upper`` (columns scaled)."""
+    """``argmin |design @ x - target|`` subject to ``lower <= x <= upper`` (columns scaled).
+
+    A tall problem is first reduced to its triangular factor (:func:`compress_rows`), which has
+    the same minimiser: the bounded solver then never copies a million-row design.
+    """
+    if design.shape[0] > COMPRESS_FACTOR * design.shape[1]:
+        design, target = compress_rows(design, target)
     scale = np.linalg.norm(design, axis=0)
     scale[scale == 0] = 1.0
     upper = np.full(design.shape[1], np.inf) if upper is None else upper

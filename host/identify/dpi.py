@@ -13,6 +13,7 @@ the compensator is inactive on it).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 
 import numpy as np
 from numpy.typing import NDArray
@@ -29,6 +30,22 @@ from host.identify.common import (
     check_slope_ratio,
 )
 
+CHUNK_ROWS = 65_536  # rows of the design built at a time: memory stays ~50 MB for any record length
+
+
+def fill_chunks(
+    u: NDArray[np.float64], dx: float, n: int, start: MemoryStart, rows: int = CHUNK_ROWS
+) -> Iterator[NDArray[np.float64]]:
+    """:func:`digit_fills` in consecutive row blocks of at most ``rows`` (the plays carry over)."""
+    thresholds = np.arange(n + 1, dtype=np.float64) * (dx / 2.0)
+    x = u - (float(u.min()) + n * dx / 2.0)
+    z0 = branch_play_state(float(x[start.index]), thresholds, start.branch)
+    z0[-1] = 0.0
+    for first in range(start.index, u.size, rows):
+        z = play_outputs(x[first : first + rows], thresholds, z0)
+        z0 = z[-1].copy()
+        yield (z[:, :-1] - z[:, 1:]) / dx + 0.5
+
 
 def digit_fills(u: NDArray[np.float64], dx: float, n: int, start: MemoryStart) -> NDArray[np.float64]:
     """Fill of every digit (columns) at every sample from ``start.index`` (rows).
@@ -36,18 +53,40 @@ def digit_fills(u: NDArray[np.float64], dx: float, n: int, start: MemoryStart) -
     The equivalent PI model has ``n + 1`` plays centred on the input range; the last one
     (threshold = half the range) never moves inside the range and starts centred.
     """
-    thresholds = np.arange(n + 1, dtype=np.float64) * (dx / 2.0)
-    x = u - (float(u.min()) + n * dx / 2.0)
-    z0 = branch_play_state(float(x[start.index]), thresholds, start.branch)
-    z0[-1] = 0.0
-    z = play_outputs(x[start.index :], thresholds, z0)
-    return (z[:, :-1] - z[:, 1:]) / dx + 0.5
+    return np.concatenate(list(fill_chunks(u, dx, n, start)))
 
 
 def branch_regressors(fills: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Cumulative fill gained (expansion) and lost (contraction) per digit since the start."""
     change = np.diff(fills, axis=0, prepend=fills[:1])
     return np.cumsum(np.maximum(change, 0.0), axis=0), np.cumsum(np.maximum(-change, 0.0), axis=0)
+
+
+def compressed_branch_problem(
+    u: NDArray[np.float64], y: NDArray[np.float64], dx: float, n: int, start: MemoryStart
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(R, r)`` with ``|R x - r|^2 = |[gained, -lost, 1] x - y|^2 + const`` for every ``x``.
+
+    The triangular factor of the design and target, accumulated block by block (QR of the
+    previous factor stacked on the next rows), so the design of a long record is never held
+    whole: ``2 n + 1`` columns at 1e6 samples are 400 MB in float64, several copies 2.4 GB.
+    """
+    width = 2 * n + 1
+    factor = np.zeros((0, width + 1))
+    previous: NDArray[np.float64] | None = None
+    gained_sum, lost_sum = np.zeros(n), np.zeros(n)
+    row = start.index
+    for fills in fill_chunks(u, dx, n, start):
+        change = np.diff(fills, axis=0, prepend=fills[:1] if previous is None else previous)
+        previous = fills[-1:]
+        gained = np.cumsum(np.maximum(change, 0.0), axis=0) + gained_sum
+        lost = np.cumsum(np.maximum(-change, 0.0), axis=0) + lost_sum
+        gained_sum, lost_sum = gained[-1], lost[-1]
+        block = np.column_stack([gained, -lost, np.ones(len(fills)), y[row : row + len(fills)]])
+        row += len(fills)
+        factor = np.asarray(np.linalg.qr(np.vstack([factor, block]), mode="r"), dtype=np.float64)
+    factor = factor[:width]
+    return factor[:, :width], factor[:, width]
 
 
 def bound_asymmetry(
@@ -67,7 +106,10 @@ def bound_asymmetry(
     scale = np.linalg.norm(design, axis=0)
     scale[scale == 0] = 1.0
     scaled = design / scale
-    hessian, gradient = scaled.T @ scaled, scaled.T @ target
+    # the objective in units of |target|^2: SLSQP's tolerance is absolute, and on 1e5 samples the
+    # unnormalised objective (~1e7) left it at its iteration limit ("did not converge")
+    norm = float(target @ target) or 1.0
+    hessian, gradient = scaled.T @ scaled / norm, scaled.T @ target / norm
     pairs = np.zeros((2 * n, x.size))
     digits = np.arange(n)
     pairs[digits, digits], pairs[digits, n + digits] = -ratio, 1.0  # dYc - ratio dYe <= 0
@@ -80,7 +122,7 @@ def bound_asymmetry(
         method="SLSQP",
         bounds=Bounds(lower * scale, np.inf),
         constraints=[LinearConstraint(pairs / scale, -np.inf, 0.0)],
-        options={"maxiter": 1000, "ftol": 1e-14},
+        options={"maxiter": 5000, "ftol": 1e-15},
     )
     if not result.success:
         raise ModelError(
@@ -140,13 +182,12 @@ class DPIEstimator(HysteresisEstimator):
         target = y[start.index :]
         x0, x1 = float(u.min()), float(u.max())
         dx = (x1 - x0) / n
-        gained, lost = branch_regressors(digit_fills(u, dx, n, start))
-        design = np.column_stack([gained, -lost, np.ones(len(target))])
+        design, projected = compressed_branch_problem(u, y, dx, n, start)
         closure = np.sqrt(self.closure_weight * len(target)) * np.r_[np.ones(n), -np.ones(n), 0.0]
         floor = self.min_slope_ratio * average_slope(u, y) * dx
         x = bound_asymmetry(
             np.vstack([design, closure]),
-            np.r_[target, 0.0],
+            np.r_[projected, 0.0],
             np.r_[np.full(2 * n, floor), -np.inf],
             n,
             self.max_asymmetry,

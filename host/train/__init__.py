@@ -119,7 +119,8 @@ def save_model(trained: Trained, directory: str | Path, record: dict[str, object
     description = {
         "kind": model.kind,
         "step": {"file": "step.onnx", **spec.as_dict()},
-        "operator": {"file": "operator.npz", **operator.describe()},
+        # the memory range lets ``pmactl simulate`` start on the same outer branches as training scored
+        "operator": {"file": "operator.npz", **operator.describe(), "memory_range": list(operator.model.memory_range)},
         "training": {**record, "curve": model.curve.as_dict(), "curve_png": curve_png.name},
     }
     if isinstance(model, Hammerstein):

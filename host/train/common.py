@@ -100,23 +100,45 @@ class Curve:
 
 
 class EarlyStopping:
-    """Keep the best state seen on the held-out tail; stop after ``patience`` epochs without a gain."""
+    """Keep the best state seen on the held-out tail; stop after ``patience`` epochs without a gain.
 
-    def __init__(self, patience: int) -> None:
+    With ``smoothing`` (0 < s <= 1) the stop decision follows the exponentially smoothed score
+    ``s * score + (1 - s) * previous``: one lucky epoch neither resets the patience nor, since the
+    kept state must also be best on its own score, decides alone what is kept. ``smoothing=1``
+    (the default) is the raw score.
+    """
+
+    def __init__(self, patience: int, smoothing: float = 1.0) -> None:
+        if not 0 < smoothing <= 1:
+            raise ValueError(f"smoothing {smoothing} must be in (0, 1]")
         self.patience = patience
+        self.smoothing = smoothing
         self.best = float("inf")
         self.best_state: dict[str, object] | None = None
         self.stale = 0
+        self.smoothed = float("inf")
+        self.best_smoothed = float("inf")
 
     def update(self, score: float, state: dict[str, object]) -> bool:
         """Record ``score`` (lower is better); True when training should stop."""
         import copy
 
-        if np.isfinite(score) and score < self.best * (1.0 - 1e-4):
-            self.best, self.best_state, self.stale = score, copy.deepcopy(state), 0
+        finite = bool(np.isfinite(score))
+        if finite and score < self.best * (1.0 - 1e-4):
+            self.best, self.best_state = score, copy.deepcopy(state)
+        if finite:
+            s = self.smoothing
+            self.smoothed = score if not np.isfinite(self.smoothed) else s * score + (1 - s) * self.smoothed
+        if finite and self.smoothed < self.best_smoothed * (1.0 - 1e-4):
+            self.best_smoothed, self.stale = self.smoothed, 0
         else:
             self.stale += 1
         return self.stale >= self.patience
+
+    def restart(self) -> None:
+        """A new phase: the patience and the smoothed score start again; the best state is kept."""
+        self.stale = 0
+        self.smoothed = self.best_smoothed = float("inf")
 
 
 def progress(total: int, description: str, quiet: bool) -> Iterator[int]:

@@ -1,0 +1,123 @@
+"""``pmactl simulate BUNDLE DATA.csv --out PRED.csv``: a saved model's forward model over an input.
+
+Writes ``t, u, y_model`` (and ``y`` when the input file has it) so any protocol can score a
+pmactl model (MATLAB's ``sim``/``compare``, SysIdentPy's ``predict``). The input may be a
+recording (``t,u,y``) or a designed input (``t,u``). The start is ``--initial``: ``rest``,
+``ascending``, ``descending`` (see :mod:`host.forward`) or ``estimate`` (needs ``y``: the start
+whose output fits the record's calibration window best, as ``pmactl fit --test`` chooses it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from edge.errors import DataError
+from host.cli.lazy import lazy
+from host.cli.options import add_data_options, read_measurement
+from host.cli.outputs import OutputPathError, check_output
+
+CALIBRATION_FRACTION = 0.1  # share of the record after the input moves, as pmactl fit --test
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
+    """Add ``pmactl simulate`` to the command line."""
+    simulate = sub.add_parser("simulate", help="run a saved model's forward model (table or net) over an input CSV")
+    simulate.add_argument("bundle", metavar="BUNDLE", help="folder written by pmactl fit --save or pmactl train --save")
+    simulate.add_argument("data", metavar="DATA.csv", help="input: t [s], u (and y, if measured)")
+    simulate.add_argument("--out", required=True, metavar="PRED.csv", help="new CSV: t, u, y_model (and y)")
+    simulate.add_argument(
+        "--initial",
+        choices=["rest", "ascending", "descending", "estimate"],
+        default="rest",
+        help="start state: rest (as compiled), the ascending or descending outer branch at u[0], or estimate "
+        "(needs y: the start that fits the first 10%% after the input moves best)",
+    )
+    add_data_options(simulate, units=False)
+    simulate.set_defaults(run=lazy("host.cli.simulate"))
+
+
+def read_input(
+    path: Path, args: argparse.Namespace
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64] | None]:
+    """``t, u`` and ``y`` (``None`` when the file has no y column) of a CSV; one clear error otherwise.
+
+    A recording (a y column, or ``--columns``) is read as every measurement is
+    (:func:`host.cli.options.read_measurement`: delimiter, decimal comma, time unit); a designed
+    input is a plain ``t,u`` CSV."""
+    if getattr(args, "columns", None):
+        m = read_measurement(str(path), args)
+        return m.t, m.u, m.y
+    with path.open(newline="", encoding="utf-8-sig") as handle:
+        header = next(csv.reader(handle), [])
+    columns = [c.strip() for c in header]
+    if "y" in columns:
+        m = read_measurement(str(path), args)
+        return m.t, m.u, m.y
+    if "t" not in columns or "u" not in columns:
+        raise DataError(
+            f"{path}: columns 't' and 'u' needed; found {columns}. Name them t [s] and u (input), or map them "
+            "with --columns t=NAME,u=NAME,y=NAME"
+        )
+    with path.open(newline="", encoding="utf-8-sig") as handle:
+        rows = list(csv.reader(handle))[1:]
+    it, iu = columns.index("t"), columns.index("u")
+    t, u = np.empty(len(rows)), np.empty(len(rows))
+    for line, row in enumerate(rows, start=2):
+        try:
+            t[line - 2], u[line - 2] = float(row[it]), float(row[iu])
+        except (ValueError, IndexError):
+            raise DataError(f"{path}: line {line}: t and u must be numbers; fix or remove the line") from None
+    if t.size < 2 or not np.all(np.isfinite(t)) or not np.all(np.isfinite(u)) or np.any(np.diff(t) <= 0):
+        raise DataError(f"{path}: need at least 2 rows of finite t, u with t increasing; check the file")
+    return t, u, None
+
+
+def run(args: argparse.Namespace) -> int:
+    from host.evaluate import calibration_window
+    from host.forward import INITIAL_STATES, load_forward
+
+    data, out = Path(args.data), Path(args.out)
+    check_output(out, "--out", kind="file")
+    if out.exists():
+        raise OutputPathError(f"--out {out}: already exists; choose a new file name or move the old one away first")
+    t, u, y = read_input(data, args)
+    if args.initial == "estimate" and y is None:
+        raise DataError(
+            f"{data}: --initial estimate needs a measured y column; give --initial rest, ascending or descending"
+        )
+    model = load_forward(args.bundle)
+    if args.initial == "estimate":
+        assert y is not None
+        start, end = calibration_window(u, CALIBRATION_FRACTION)
+        fits = {}
+        for state in INITIAL_STATES:
+            prediction = model.run(u, state)
+            fits[state] = (float(np.sqrt(np.mean((prediction[start:end] - y[start:end]) ** 2))), prediction)
+        initial = min(fits, key=lambda s: fits[s][0])
+        y_model = fits[initial][1]
+        how = f"estimated on samples {start}-{end - 1} (window RMSE {fits[initial][0]:.4g})"
+    else:
+        initial, how = args.initial, "as asked"
+        y_model = model.run(u, initial)
+    columns = [t, u, y_model] + ([y] if y is not None else [])
+    names = "t,u,y_model" + (",y" if y is not None else "")
+    handle, scratch = tempfile.mkstemp(prefix=".pmactl-simulate-", suffix=".csv", dir=out.parent)
+    os.close(handle)
+    try:
+        np.savetxt(scratch, np.column_stack(columns), delimiter=",", header=names, comments="", fmt="%.9g")
+        os.replace(scratch, out)  # whole or nothing: a crash never leaves half a file under the name
+    finally:
+        Path(scratch).unlink(missing_ok=True)
+    summary = f"{model.description} via {model.evaluator}, from {initial} ({how}): {u.size} samples -> {out}"
+    if y is not None:
+        rmse = float(np.sqrt(np.mean((y_model - y) ** 2)))
+        summary += f"; RMSE against y {rmse:.4g} ({100 * rmse / float(np.ptp(y)):.2f} % p-p, no offset fitted)"
+    print(summary)
+    return 0
