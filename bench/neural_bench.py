@@ -197,8 +197,6 @@ def latency(scratch: Path, steps: int = 20_000, rounds: int = 3) -> None:
 
 def correction_latency(scratch: Path, steps: int = 20_000, rounds: int = 3) -> None:
     """The edge's correction MLP (3-16-16-1): the edge's own NeuralCorrection vs a numpy twin."""
-    import torch
-
     from edge.control.neural import NeuralCorrection
     from host.train.correction import train_correction
 
@@ -206,24 +204,24 @@ def correction_latency(scratch: Path, steps: int = 20_000, rounds: int = 3) -> N
     features = np.column_stack([rng.uniform(0, 70, 4000), rng.normal(0, 50, 4000), rng.uniform(0, 6, 4000)])
     target = 0.01 * features[:, 1] + 0.1 * np.sin(features[:, 0] / 10)
     model, *_ = train_correction(features, target, epochs=50)
-    from models_export.onnx_step import export_module
-
-    path = export_module(model, (torch.zeros(1, 3),), scratch / "corr.onnx", ["features"], ["correction_bar"])
+    path = model.to_onnx(scratch / "corr.onnx")
     spec = {
         "features": ["reference_mm", "reference_rate_mm_s", "feedforward_bar"],
         "input": "features",
         "output": "correction_bar",
     }
     edge = NeuralCorrection(path, spec)
-    state = model.state_dict()
-    layers = [(state[f"net.{i}.weight"].numpy(), state[f"net.{i}.bias"].numpy()) for i in (0, 2, 4)]
-    mean, inv_std, scale = (state[k].numpy() for k in ("mean", "inv_std", "scale"))
+    layers = [
+        (model.layers[k].astype(np.float32), model.layers[k + 1].astype(np.float32))
+        for k in range(0, len(model.layers), 2)
+    ]
+    mean, inv_std, scale = model.mean.astype(np.float32), model.inv_std.astype(np.float32), model.scale
 
     def numpy_step(values: tuple[float, ...]) -> float:
-        x = (np.array(values[:3], np.float32) - mean[0]) * inv_std[0]
+        x = (np.array(values[:3], np.float32) - mean) * inv_std
         for i, (w, b) in enumerate(layers):
             x = w @ x + b
-            if i < 2:
+            if i < len(layers) - 1:
                 x = np.tanh(x)
         return float(x[0] * scale)
 
