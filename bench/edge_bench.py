@@ -5,7 +5,7 @@ Usage: python bench/edge_bench.py [--seconds 60] [--skip-realtime] [--before DIR
        python bench/edge_bench.py --only-live 3 [--rig-seconds 20]
 
 1. Per-tick breakdown (median / p99 us) of a 20 s lockstep run on the HIL at 1 kHz with a
-   Preisach lookup-table inverse and a 2-5-10-1 ONNX correction (seed 000's BP net shape):
+   Preisach lookup-table inverse and a 2-5-10-1 ONNX correction (Ai2019's BP net shape):
    read, inverse, NN, PID, limits + safety, write, log. read and write run the emulated chips
    and integrate the plant inside the bus transfers, so they overstate a real bus's CPU cost.
    Then the whole-tick compute (supervisor + control law + telemetry row) of untimed runs, with

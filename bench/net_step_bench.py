@@ -3,7 +3,7 @@
 Usage: python bench/net_step_bench.py [--steps 20000] [--rounds 5]
 
 Nets: the correction's shape 3-16-16-1 (normalisation and output scale inside the graph, exported
-by torch as ``host.train.correction`` does), seed 000's BP net 2-5-10-1 (hand-built graph), and
+by torch as ``host.train.correction`` does), Ai2019's BP net 2-5-10-1 (hand-built graph), and
 the LSTM-NARMAX step graph of ``models_export.onnx_step`` (hidden 7). The fused step is compiled
 from the ONNX file (``edge.control.fused_graph``); its parity is measured against torch on a free
 run of 2 000 steps. Timings: the two evaluators alternate in ``--rounds`` rounds of ``--steps``
@@ -86,7 +86,7 @@ def mlp_rows(scratch: Path, steps: int, rounds: int) -> None:
     bp, _ = mlp(scratch / "bp.onnx")
     nets = [
         ("correction MLP 3-16-16-1", corr, ["reference_mm", "reference_rate_mm_s", "feedforward_bar"], module),
-        ("BP net 2-5-10-1 (seed 000)", bp, ["reference_mm", "feedforward_bar"], None),
+        ("BP net 2-5-10-1 (Ai2019)", bp, ["reference_mm", "feedforward_bar"], None),
     ]
     for name, path, features, torch_module in nets:
         edge = NeuralCorrection(path, {"features": features, "input": "features", "output": "correction_bar"})

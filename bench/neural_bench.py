@@ -1,4 +1,4 @@
-"""Neural hysteresis models: seed 001 Table 1 on HIL and real data, step latency, closed loop.
+"""Neural hysteresis models: Wu2025 Table 1 on HIL and real data, step latency, closed loop.
 
 Usage: python bench/neural_bench.py [--data ../shared/data] [--epochs 150] [--only tables|latency|loop|tick|trainer]
        python bench/neural_bench.py --only trainer --before DIR [--seeds 0 1]
@@ -12,7 +12,7 @@ Usage: python bench/neural_bench.py [--data ../shared/data] [--epochs 150] [--on
    spinning, bound preallocated arrays) against a numpy evaluator of the same weights, wall and
    CPU time, measured interleaved in one run.
 3. Closed loop on the HIL through ``pmactl edge run``: PID, PID + feedforward, PID +
-   feedforward + trained correction, on seed 000's sine and seed 002's amplitude ramp.
+   feedforward + trained correction, on Ai2019's sine and Zhou2022's amplitude ramp.
 4. Whole-tick compute with that correction (bench/edge_bench.py's breakdown).
 5. ``--only trainer``: LSTM-NARMAX on the real piezo's 40 000-sample ``20_hz_no_lp`` record, CPU
    and wall time of ``train_model`` and the held-out error on the six validation runs, for this
@@ -297,8 +297,8 @@ def closed_loop(scratch: Path) -> None:
     print("| reference | PID RMS [mm] | + feedforward | + correction | ratio ff / PID | ratio ff+corr / PID |")
     print("|---|---:|---:|---:|---:|---:|")
     references = {
-        "seed 000 sine 30 sin(2 pi 0.2 t) + 40": ["--duration", "25", "--settle", "5"],
-        "seed 002 amplitude ramp": [
+        "Ai2019 sine 30 sin(2 pi 0.2 t) + 40": ["--duration", "25", "--settle", "5"],
+        "Zhou2022 amplitude ramp": [
             "--reference",
             "ramp-sine:peak=30,frequency=1,offset=40,rise=10,hold=1",
             "--settle",

@@ -39,7 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=DEFAULT_REFERENCE,
         metavar="SPEC",
         help="desired contraction: sine:amplitude=,frequency=,offset= | ramp-sine:peak=,frequency=,offset=,rise=,hold= "
-        "| const:value= | a CSV with t,y_ref (default: seed 000's 30 sin(2 pi 0.2 t) + 40 mm)",
+        "| const:value= | a CSV with t,y_ref (default: Ai2019's 30 sin(2 pi 0.2 t) + 40 mm)",
     )
     erun.add_argument("--no-feedforward", action="store_true", help="PID alone (no inverse-hysteresis feedforward)")
     erun.add_argument("--no-correction", action="store_true", help="ignore the bundle's ONNX correction")
@@ -66,14 +66,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--protocol",
         required=True,
         metavar="NAME",
-        help="triangles (seed 000) | forc (seed 003, for a Preisach fit) | sines | steps | multisine | chirp, "
+        help="triangles (Ai2019) | forc (Schreiber, for a Preisach fit) | sines | steps | multisine | chirp, "
         "optionally NAME:key=value,... (lists with /), or FILE.csv with columns t,<command>",
     )
     erec.add_argument("--out", required=True, metavar="RUN.csv", help="the recording to create (+ RUN.meta.json)")
     erec.add_argument(
         "--range",
         metavar="LOW:HIGH",
-        help="command range: bar (default 0:4, seed 000), or commanded deg on a joint (default -30:30); "
+        help="command range: bar (default 0:4, Ai2019), or commanded deg on a joint (default -30:30); "
         "within the config's limits",
     )
     erec.add_argument(

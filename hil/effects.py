@@ -21,13 +21,13 @@ SEED_000_LOADS_KG = (0.0, 1.5, 3.5, 5.5, 7.5)
 
 EFFECT_RANGES: dict[str, dict[str, tuple[float, float]]] = {
     # velocity-strengthening braid friction, quadratic in speed: loops widen with input rate
-    # (seed 001): loop area x1.8-2.4 from 0.05 to 0.5 Hz, friction +4-26 % at the 0.01 m/s of slow triangles
+    # (Wu2025): loop area x1.8-2.4 from 0.05 to 0.5 Hz, friction +4-26 % at the 0.01 m/s of slow triangles
     "rate_dependence": {"rate_friction_s_per_m": (30.0, 80.0)},
-    # viscoelastic relaxation under a constant load (seed 003)
+    # viscoelastic relaxation under a constant load (Schreiber)
     "creep": {"creep_fraction": (0.03, 0.10), "creep_time_constant_s": (5.0, 30.0)},
-    # pneumatic line dead time (seed 004 measured 0.3 s)
+    # pneumatic line dead time (PAMInertial measured 0.3 s)
     "transport_delay": {"dead_time_s": (0.05, 0.30)},
-    # the hanging mass steps through seed 000's loads (Figs 8-9); order drawn, not ranged
+    # the hanging mass steps through Ai2019's loads (Figs 8-9); order drawn, not ranged
     "load_dependence": {},
     # the rig warms up: bladder and braid soften
     "temperature_drift": {

@@ -1,4 +1,4 @@
-"""An antagonistic joint: two pneumatic muscles on a pulley, an angle sensor and two valves (seed 003).
+"""An antagonistic joint: two pneumatic muscles on a pulley, an angle sensor and two valves (Schreiber).
 
 Each muscle is the single-muscle physics of :mod:`hil.plant` (Tondu-Lopez force
 :func:`~hil.plant.muscle_force_n`, braid friction as Maxwell-slip elements
@@ -6,7 +6,7 @@ Each muscle is the single-muscle physics of :mod:`hil.plant` (Tondu-Lopez force
 :func:`~hil.plant.valve_step`, pneumatic dead time), with the muscle's own ``PlantParams`` (its
 load, return spring and damping are not used: the joint replaces them).
 
-Kinematics (seed 003 eq 1 with equal upper and lower attachment radii ``r``, to first order in
+Kinematics (Schreiber eq 1 with equal upper and lower attachment radii ``r``, to first order in
 the angle; a pulley exactly): muscle A contracts by ``x_A = x_pre + r theta`` and muscle B by
 ``x_B = x_pre - r theta``, ``theta`` [rad] positive towards A. Pretension: both muscles are
 mounted at the contraction ``x_pre`` where each pulls ``pretension_n`` at ``pretension_bar``

@@ -1,8 +1,8 @@
 """Pneumatic muscle, proportional valve and load: the emulated rig's physics.
 
 Deliberately *not* one of pmactl's identification models: the hysteresis comes from friction
-between braid and bladder as Maxwell-slip elements (seed 004 sec 2.3), acting inside a force
-balance with the Tondu-Lopez static muscle force (seed 004 eq 1)::
+between braid and bladder as Maxwell-slip elements (PAMInertial sec 2.3), acting inside a force
+balance with the Tondu-Lopez static muscle force (PAMInertial eq 1)::
 
     F_muscle = pi r0^2 p [a (1 - k eps)^2 - b(T)],   eps = contraction / rest length
     F_muscle(p, x) = m(t) g + k_s x + sum_i F_slip_i(x) + c dx/dt

@@ -18,7 +18,7 @@ def _time(duration_s: float, dt_s: float) -> np.ndarray:
 
 
 def triangles(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Seed 000: triangles 0 -> 1, 2, 3, 4 bar at 0.05 Hz (20 s each), repeated to fill."""
+    """Ai2019: triangles 0 -> 1, 2, 3, 4 bar at 0.05 Hz (20 s each), repeated to fill."""
     t = _time(duration_s, dt_s)
     period = 20.0
     cycle = (t // period).astype(int)
@@ -27,7 +27,7 @@ def triangles(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.nd
 
 
 def sines(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Seed 001: sinusoids at several rates and amplitudes around 2 bar.
+    """Wu2025: sinusoids at several rates and amplitudes around 2 bar.
 
     Segments of whole cycles, each starting and ending at the offset, so the command never
     steps between segments (a step would test the valve, not the hysteresis).
@@ -46,7 +46,7 @@ def sines(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarra
 
 
 def amplitude_ramp(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Seed 002 eq 33: a sine whose amplitude ramps up, holds for a tenth, ramps down."""
+    """Zhou2022 eq 33: a sine whose amplitude ramps up, holds for a tenth, ramps down."""
     t = _time(duration_s, dt_s)
     frequency = 0.25
     x = t / duration_s
@@ -70,7 +70,7 @@ def holds(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarra
 
 
 def forc(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Seed 003: first-order reversal curves, 0 -> rising maxima -> 0, at 0.4 bar/s."""
+    """Schreiber: first-order reversal curves, 0 -> rising maxima -> 0, at 0.4 bar/s."""
     rate = 0.4
     peaks = np.linspace(0.4, 4.0, 10)
     pieces = [np.concatenate([np.arange(0.0, p, rate * dt_s), np.arange(p, 0.0, -rate * dt_s)]) for p in peaks]
@@ -98,7 +98,7 @@ STEPPED_SINE_FREQUENCIES_HZ = (0.1, 0.2, 0.35, 0.6, 1.0, 1.7, 3.0)
 
 
 def stepped_sine(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Seed 004's frequency response: sinusoids of 0.6 bar around 2 bar, one frequency after another.
+    """PAMInertial's frequency response: sinusoids of 0.6 bar around 2 bar, one frequency after another.
 
     Frequencies :data:`STEPPED_SINE_FREQUENCIES_HZ` in ascending order, each for an equal share of
     the duration in whole cycles (at least 3: one to settle, two to analyse), each starting and
@@ -123,7 +123,7 @@ def isotonic(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.nda
     """Static force map: slow triangles 0.3 -> 5.5 -> 0.3 bar, ten over the duration (at least 40 s each).
 
     Quasi-static (0.26 bar/s at 400 s), so the load cell reads the muscle's static force minus its
-    braid friction. With ``--effect load_dependence`` the load steps through seed 000's five masses,
+    braid friction. With ``--effect load_dependence`` the load steps through Ai2019's five masses,
     two triangles per mass: isotonic curves at five forces, the data a static force law is fitted on.
     """
     t = _time(duration_s, dt_s)
@@ -141,7 +141,7 @@ def isometric_contraction_ratio(t: float, duration_s: float) -> float:
 
 
 def isometric(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Seed 004 sec 2.1's isometric test: the muscle clamped at six contraction ratios
+    """PAMInertial sec 2.1's isometric test: the muscle clamped at six contraction ratios
     (:data:`ISOMETRIC_CONTRACTION_RATIOS`, the recorder holds it there), a pressure triangle
     0.3 -> 5.5 -> 0.3 bar at each; the load cell then reads the static force itself."""
     t = _time(duration_s, dt_s)
@@ -150,7 +150,7 @@ def isometric(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.nd
 
 
 def decaying_sines(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Seed 003 Fig 7's wiping-out test: one sine cycle over the full 0-4 bar from the 2 bar middle,
+    """Schreiber Fig 7's wiping-out test: one sine cycle over the full 0-4 bar from the 2 bar middle,
     then ten whose amplitude falls linearly to zero, the whole sequence twice. The full cycle wipes
     out what came before, so both halves must give the same output."""
     t = _time(duration_s, dt_s)
@@ -180,7 +180,7 @@ def minor_loop_corner_times(duration_s: float) -> np.ndarray:
 
 
 def minor_loops(duration_s: float, dt_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Seed 003 Fig 8's congruency test: the same small minor loop (2.0 <-> 2.5 bar, three times)
+    """Schreiber Fig 8's congruency test: the same small minor loop (2.0 <-> 2.5 bar, three times)
     after two different histories: arriving at 2 bar from below (4 -> 0.5 -> 2) and from above
     (0 -> 3.5 -> 2). One ramp rate throughout; corners in :data:`MINOR_LOOP_CORNERS_BAR`. The
     loop is small so that the larger friction elements keep each history (an offset between the

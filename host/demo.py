@@ -5,10 +5,10 @@ For every model: identify on the training recording, score on the held-out one (
 and offset estimated, see :mod:`host.evaluate`), write the bundle, load it back the way the
 edge does (numpy only, checksums verified) and check that the lookup tables reproduce the
 reference model and that the inverse table undoes the forward table. Then run the edge loop
-(``pmactl edge run``) on the emulated rig in lockstep with the Preisach bundle: seed 000's
+(``pmactl edge run``) on the emulated rig in lockstep with the Preisach bundle: Ai2019's
 tracking test, PID alone, PID + inverse-hysteresis feedforward, and PID + feedforward + the
 neural correction ``pmactl train --model correction`` adds to the bundle (trained here on the
-emulated rig's working range, see :mod:`host.train.correction`). Last, seed 003's antagonistic
+emulated rig's working range, see :mod:`host.train.correction`). Last, Schreiber's antagonistic
 joint: PID alone against PID + inverse-Preisach feedforward (:func:`joint_loop`).
 
 Everything goes to ``--out`` (default ``./pmactl-demo``; new, empty, or an earlier demo's
@@ -41,7 +41,7 @@ from host.train.correction import correction_bundle
 from host.workflow import make_estimator, rest_state, save_bundle, score_on
 
 MODELS = ("pi", "mpi", "dpi", "preisach")
-TRACKING = "sine:amplitude=30,frequency=0.2,offset=40"  # seed 000 Table 4: 3 sin(2 pi 0.2 t) + 4 cm
+TRACKING = "sine:amplitude=30,frequency=0.2,offset=40"  # Ai2019 Table 4: 3 sin(2 pi 0.2 t) + 4 cm
 TRACKING_S, SETTLE_S = 25.0, 5.0
 # key: (label, inverse feedforward on, trained correction on)
 CONTROLLERS = {
@@ -112,7 +112,7 @@ def tracked_run(
 
 
 def closed_loop(bundle_dir: Path, out: Path, say: Callable[[str], None]) -> list[dict[str, object]]:
-    """Seed 000 Table 5 on the emulated rig, one row per controller (errors in mm)."""
+    """Ai2019 Table 5 on the emulated rig, one row per controller (errors in mm)."""
     return [
         tracked_run(
             HIL_RIG_CONFIG,
@@ -134,7 +134,7 @@ JOINT_FORC_S, JOINT_S = 120.0, 20.0
 
 
 def joint_loop(out: Path, say: Callable[[str], None]) -> list[dict[str, object]]:
-    """Seed 003's antagonistic joint on the emulated rig: record first-order descending curves
+    """Schreiber's antagonistic joint on the emulated rig: record first-order descending curves
     through the edge's static inversion, fit the Everett map (deg -> deg), then track a sine with
     PID alone and with PID + inverse-Preisach feedforward (errors in deg)."""
     csv = write_joint_recording(record_joint("forc", 0, JOINT_FORC_S, command="angle"), out / "joint-forc.csv")
@@ -233,10 +233,10 @@ def run_demo(args: argparse.Namespace) -> int:
     loop = closed_loop(out / "preisach", out, say)
     tracking = tracking_figure(out, "tracking", list(CONTROLLERS), loop, reachable)
     pid_rms, ff_rms, nn_rms = (float(row["rms_error"]) for row in loop)  # type: ignore[arg-type]
-    say(f"Feedforward cuts the RMS error by {1 - ff_rms / pid_rms:.0%} (seed 000 reports 48 %); with the trained")
+    say(f"Feedforward cuts the RMS error by {1 - ff_rms / pid_rms:.0%} (Ai2019 reports 48 %); with the trained")
     say(f"correction the RMS error is {nn_rms / pid_rms:.2f}x PID alone. Tracking: {tracking}")
     say("")
-    say(f"The antagonistic joint of seed 003 ({HIL_JOINT_CONFIG.name}: two muscles on a pulley, 500 Hz, lockstep),")
+    say(f"The antagonistic joint of Schreiber ({HIL_JOINT_CONFIG.name}: two muscles on a pulley, 500 Hz, lockstep),")
     say(f"tracking 15 sin(2 pi 0.2 t) deg for {JOINT_S:g} s, scored after {SETTLE_S:g} s:")
     joint = joint_loop(out, say)
     joint_cut = 1 - float(joint[1]["rms_error"]) / float(joint[0]["rms_error"])  # type: ignore[arg-type]

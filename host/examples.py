@@ -1,6 +1,6 @@
 """The example data shipped with pmactl, recorded on the HIL emulator.
 
-``pma_triangles.csv``: seed 000's protocol (triangles 0 -> 1, 2, 3, 4 bar at 0.05 Hz, 80 s);
+``pma_triangles.csv``: Ai2019's protocol (triangles 0 -> 1, 2, 3, 4 bar at 0.05 Hz, 80 s);
 ``pma_mixed.csv``: every protocol in turn (60 s). Both from the default rig (no hidden effect)
 at 100 Hz. Regenerate with ``python -m host.examples [OUT_DIR]``, which runs the same as::
 

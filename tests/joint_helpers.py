@@ -90,7 +90,7 @@ def step_reference(path: Path, start_deg: float, target_deg: float, at_s: float,
 
 @dataclass
 class StepMetrics:
-    """Seed 003 Fig 11's reading of a step: overshoot [deg], 10-90 % rise time [s], 2 % settling
+    """Schreiber Fig 11's reading of a step: overshoot [deg], 10-90 % rise time [s], 2 % settling
     time [s] (or inf), steady-state error over the last second [deg]."""
 
     overshoot_deg: float

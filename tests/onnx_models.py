@@ -22,7 +22,7 @@ def _save(graph: onnx.GraphProto, path: Path) -> Path:
 
 
 def mlp(path: Path, sizes: Sequence[int] = (2, 5, 10, 1), seed: int = 0, scale: float = 0.3, name: str = "features"):
-    """A tanh MLP (seed 000's BP net shape by default); returns (path, numpy forward)."""
+    """A tanh MLP (Ai2019's BP net shape by default); returns (path, numpy forward)."""
     rng = np.random.default_rng(seed)
     weights = [rng.normal(0, scale, (a, b)).astype(np.float32) for a, b in zip(sizes, sizes[1:])]
     biases = [rng.normal(0, scale, b).astype(np.float32) for b in sizes[1:]]

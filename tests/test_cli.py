@@ -142,7 +142,7 @@ def test_demo_trained_correction_beats_feedforward_alone(demo):
 
 
 def test_demo_joint_feedforward_halves_the_angle_error(demo):
-    """Seed 003's joint on the emulated rig: inverse-Preisach feedforward cuts RMS angle error >= 50 %."""
+    """Schreiber's joint on the emulated rig: inverse-Preisach feedforward cuts RMS angle error >= 50 %."""
     pid, with_ff = demo[0]["joint"]
     assert pid["unit"] == "deg" and pid["faults"] == [] == with_ff["faults"]
     assert with_ff["rms_error"] <= 0.5 * pid["rms_error"]

@@ -1,4 +1,4 @@
-"""DPI laws (seed 002): digitized state, equivalence with PI, compensator, exact inverse."""
+"""DPI laws (Zhou2022): digitized state, equivalence with PI, compensator, exact inverse."""
 
 from __future__ import annotations
 

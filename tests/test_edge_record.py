@@ -1,7 +1,7 @@
 """``pmactl edge record``: open-loop recordings on the emulated rig, end to end through the CLI.
 
 The record -> fit -> run path is checked on the property the papers promise (feedforward +
-PID tracks seed 000's sine with at most 0.6x the RMS error of PID alone), on the default
+PID tracks Ai2019's sine with at most 0.6x the RMS error of PID alone), on the default
 emulated muscle and on a plant variant the protocols were not written against (creep).
 """
 

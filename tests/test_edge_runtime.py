@@ -19,8 +19,8 @@ def bundle(tmp_path_factory):
 
 
 def test_feedforward_cuts_the_rms_tracking_error_by_at_least_half(bundle):
-    """Seed 000 Tables 4-5 on the HIL at 1 kHz. Measured: PID RMS 5.14 mm -> PID + FF 2.45 mm (-52 %);
-    seed 000 reports -48 %."""
+    """Ai2019 Tables 4-5 on the HIL at 1 kHz. Measured: PID RMS 5.14 mm -> PID + FF 2.45 mm (-52 %);
+    Ai2019 reports -48 %."""
     pid = runtime(bundle, feedforward=False, settle_s=5.0).run(25.0).as_dict()
     with_ff = runtime(bundle, settle_s=5.0).run(25.0).as_dict()
     assert pid["faults"] == [] and with_ff["faults"] == []
@@ -30,7 +30,7 @@ def test_feedforward_cuts_the_rms_tracking_error_by_at_least_half(bundle):
 
 
 def test_seed_002_amplitude_ramp_at_5_ms(bundle):
-    """Seed 002 eq 33: 1 Hz sine, amplitude 0 -> 30 mm in 10 s, held 1 s, back to 0; Ts = 5 ms;
+    """Zhou2022 eq 33: 1 Hz sine, amplitude 0 -> 30 mm in 10 s, held 1 s, back to 0; Ts = 5 ms;
     the first second (the rise from rest to the 40 mm offset) unscored. Measured: PID alone RMSE
     8.16 mm (13.6 % of the 60 mm p-p), PID + FF 3.43 mm (5.7 %)."""
     config = rig_config(loop={"rate_hz": 200.0})
@@ -74,7 +74,7 @@ def test_telemetry_has_every_tick_the_frame_columns_and_an_end_event(bundle, tmp
     ff, fb = record.column("u_ff_bar"), record.column("u_fb_bar")
     assert abs(u[-1] - (ff[-1] + fb[-1])) < 1e-9  # unsaturated: the command is the sum of its parts
     assert not record.rows["wr_dac"].any() and not record.rows["rd_adc"].any()
-    # seed 000's sine reaches 70 mm, the example bundle (0..4 bar) 58 mm: said before arming
+    # Ai2019's sine reaches 70 mm, the example bundle (0..4 bar) 58 mm: said before arming
     assert [e["kind"] for e in record.events] == ["arm", "warning", "end"]
     assert "beyond" not in str(record.events[1]["text"]) and "bundle reaches only" in str(record.events[1]["text"])
     end = record.events[-1]["summary"]

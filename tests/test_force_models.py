@@ -16,7 +16,7 @@ SAROSI_TRUE = {"a": 150.0, "b": -0.08, "c": -0.05, "d": 2.0, "e": -150.0}
 
 
 def sarosi_data(seed: int, noise_n: float = 2.0):
-    """Force from Sarosi's law (seed 000 eq 15), a second law the HIL does not use."""
+    """Force from Sarosi's law (Ai2019 eq 15), a second law the HIL does not use."""
     rng = np.random.default_rng(seed)
     p = rng.uniform(0.5, 6.0, 500)
     eps = rng.uniform(0.0, 0.2, 500)

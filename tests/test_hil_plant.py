@@ -62,7 +62,7 @@ def test_drift_under_a_hold_only_with_creep():
 
 
 def test_heavier_load_means_less_contraction_at_the_same_pressure():
-    """Seed 000 Fig 9: for the same displacement a heavier load needs more pressure."""
+    """Ai2019 Fig 9: for the same displacement a heavier load needs more pressure."""
     ramp = np.linspace(0.0, 4.0, 20_000)
     results = []
     for kg in (0.0, 3.5, 7.5):
@@ -101,7 +101,7 @@ def test_effect_parameters_are_drawn_reproducibly(effect):
 def test_scenarios_stay_within_the_valve_range(scenario):
     commands = SCENARIOS[scenario](60.0, 1e-3, np.random.default_rng(0))
     assert commands.size == 60_000
-    # hysteresis protocols stay within seed 000's 0-4 bar; force maps use the valve's whole supply
+    # hysteresis protocols stay within Ai2019's 0-4 bar; force maps use the valve's whole supply
     top = PlantParams().supply_bar if scenario in FORCE_SCENARIOS else 4.0
     assert commands.min() >= 0.0 and commands.max() <= top
     assert np.abs(np.diff(commands)).max() < 0.05  # no steps: joins are continuous

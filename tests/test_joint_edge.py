@@ -1,4 +1,4 @@
-"""The joint on the edge: ``sim://joint`` behind the same ports, the joint control law, seed 003's
+"""The joint on the edge: ``sim://joint`` behind the same ports, the joint control law, Schreiber's
 comparisons (Fig 11 steps, a sine tracking table), PID alone vs PID + inverse-Preisach
 feedforward, and the command line.
 
@@ -29,7 +29,7 @@ from tests.joint_helpers import (
 )
 
 RUN_URL = "sim://joint?clock=lockstep&seed=3"
-EQ8 = {"feedback": "eq8", "kp": 1.0, "ki_per_s": 10.0}  # seed 003 eq 8's sum, at its best gains
+EQ8 = {"feedback": "eq8", "kp": 1.0, "ki_per_s": 10.0}  # Schreiber eq 8's sum, at its best gains
 ADC_DEG = 2e-3 * 54.545454  # one ADS1015 count at 4.096 V full scale, in deg of the angle channel
 
 
@@ -130,7 +130,7 @@ def sine_table(bundle: Path, tmp_path: Path, **joint: object) -> dict[str, dict[
 
 @pytest.mark.parametrize("joint", [{}, EQ8], ids=["through_model", "eq8"])
 def test_feedforward_halves_the_sine_tracking_error(bundle, tmp_path, joint):
-    """Seed 003's tracking comparison: 15 sin(2 pi 0.2 t) deg, scored after 5 s."""
+    """Schreiber's tracking comparison: 15 sin(2 pi 0.2 t) deg, scored after 5 s."""
     table = sine_table(bundle, tmp_path, **joint)
     pid, ff = table["PID"], table["PID + inverse Preisach"]
     print("\n| | max [deg] | mean abs [deg] | RMS [deg] |\n|---|---:|---:|---:|")
@@ -148,7 +148,7 @@ def step_runs(bundle: Path, tmp_path: Path, start: float, target: float, **joint
 
 @pytest.mark.parametrize(("start", "target"), [(0.0, -15.0), (-10.0, 10.0)])
 def test_step_responses_feedforward_rises_faster(bundle, tmp_path, start, target):
-    """Seed 003 Fig 11: with the compensator the angle rises faster; both settle on the target."""
+    """Schreiber Fig 11: with the compensator the angle rises faster; both settle on the target."""
     runs = step_runs(bundle, tmp_path, start, target)
     pid, ff = (step_metrics(runs[f], start, target, 6.0) for f in (False, True))
     print(f"\nstep {start:+g} -> {target:+g} deg: PID {pid}; PID + FF {ff}")

@@ -1,6 +1,6 @@
 """The emulated antagonistic joint: statics from the single-muscle physics, wiping-out, congruency, CLI.
 
-Statistics (seed 003 Figs 7-8):
+Statistics (Schreiber Figs 7-8):
 
 * wiping-out: the decaying-sine sequence is played twice; after the full cycle that opens each
   sequence, ``max |theta_2(t) - theta_1(t)|`` over the rest, as a fraction of the output range.

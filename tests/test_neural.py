@@ -29,7 +29,7 @@ def values(reference: float, feedforward: float) -> tuple[float, ...]:
 
 
 def test_the_session_computes_what_the_network_does(tmp_path):
-    path, forward = mlp(tmp_path / "bp.onnx")  # seed 000's 2-5-10-1 BP net
+    path, forward = mlp(tmp_path / "bp.onnx")  # Ai2019's 2-5-10-1 BP net
     correction = NeuralCorrection(path, SPEC)
     rng = np.random.default_rng(3)
     for x in rng.normal(0, 2, (200, 2)):

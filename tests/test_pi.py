@@ -1,4 +1,4 @@
-"""Play operator and PI model laws (seed 000 eqs 2-5, 14)."""
+"""Play operator and PI model laws (Ai2019 eqs 2-5, 14)."""
 
 from __future__ import annotations
 
@@ -75,7 +75,7 @@ def test_inverse_driven_through_the_history_tracks_any_state(seed):
 
 
 def test_inverse_parameters_match_the_inverse_loading_curve():
-    """r'_i = phi(r_i) and the inverse's slopes are 1/S_i (seed 000 eq 14, indices from 0)."""
+    """r'_i = phi(r_i) and the inverse's slopes are 1/S_i (Ai2019 eq 14, indices from 0)."""
     r = np.array([0.0, 0.5, 1.2, 2.0])
     w = np.array([0.8, 0.4, -0.1, 0.3])
     r_inv, w_inv = inverse_pi_parameters(r, w)
@@ -96,7 +96,7 @@ def test_exponential_parameterisation_follows_eq5():
 
 
 def test_eq4_initial_state_matches_play_definition():
-    """Seed 000 eq 4 with y0 = 0 is the demagnetised state at 0 followed by a step to u(0)."""
+    """Ai2019 eq 4 with y0 = 0 is the demagnetised state at 0 followed by a step to u(0)."""
     model = PIModel([0.0, 0.4, 1.0], [1.0, 1.0, 1.0])
     model.set_state({"plays": np.zeros(3)})
     model.step(0.7)

@@ -1,4 +1,4 @@
-"""Preisach laws (seed 003): Everett map, wiping-out, congruency, relays, exact inverse."""
+"""Preisach laws (Schreiber): Everett map, wiping-out, congruency, relays, exact inverse."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Dead-zone shaper (seed 000 eqs 6, 7, 14) and the MPI model (eq 8, 12)."""
+"""Dead-zone shaper (Ai2019 eqs 6, 7, 14) and the MPI model (eq 8, 12)."""
 
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ def test_knot_form_equals_the_dead_zone_sum(seed):
 
 
 def test_eq14_inverse_dead_zone_parameters_equal_the_swapped_map():
-    """Seed 000 eq 14 with indices from 0: g'_j = sum_{k<=j} v_k (g_j - g_k),
+    """Ai2019 eq 14 with indices from 0: g'_j = sum_{k<=j} v_k (g_j - g_k),
     v'_0 = 1/v_0, v'_j = -v_j / (S_j S_{j-1}). The extracted text's '1 +' belongs to a PI
     part with an implicit unit linear weight; for the dead zones the sums start at v_0."""
     g = np.array([0.0, 1.0, 2.0, 3.5])

@@ -13,8 +13,8 @@ from tests.conftest import REPO
 
 CONFIG = str(REPO / "docs" / "examples" / "hil-rig.toml")
 REFERENCES = {
-    "seed 000 sine": ["--duration", "25", "--settle", "5"],
-    "seed 002 amplitude ramp": [
+    "Ai2019 sine": ["--duration", "25", "--settle", "5"],
+    "Zhou2022 amplitude ramp": [
         "--reference",
         "ramp-sine:peak=30,frequency=1,offset=40,rise=10,hold=1",
         "--settle",

@@ -1,7 +1,7 @@
-"""The antagonistic joint's control law (seed 003 Figs 4 and 10), pure: frame in, two valve
+"""The antagonistic joint's control law (Schreiber Figs 4 and 10), pure: frame in, two valve
 commands out.
 
-Seed 003 linearises the joint first and compensates the hysteresis that is left. Per tick,
+Schreiber linearises the joint first and compensates the hysteresis that is left. Per tick,
 with the desired angle ``theta_d`` [deg]:
 
 1. feedforward ``u_ff`` [deg]: the inverse Preisach model of the *statically inverted* joint,
@@ -9,7 +9,7 @@ with the desired angle ``theta_d`` [deg]:
    ``deg,deg``; identified from first-order descending curves recorded through this same
    static inversion: ``pmactl hil record --rig joint --joint-command angle --scenario forc``,
    then ``pmactl fit --model preisach --preisach-method forc --units deg,deg``);
-2. feedback ``u_fb`` [deg]: PID on the angle error (seed 003 eq 8,
+2. feedback ``u_fb`` [deg]: PID on the angle error (Schreiber eq 8,
    ``u(k) = u_IPM(k) + K_P e(k) + K_I sum e + K_D (e(k) - e(k-q))``; here the derivative acts
    on the filtered measurement, with anti-windup, :class:`edge.control.pid.PID`). Without a
    model ("PID alone") ``u_ff = 0``;
@@ -17,10 +17,10 @@ with the desired angle ``theta_d`` [deg]:
    through the inverse model, ``theta_c = IPM(theta_d + PID(e))``: the model's memory then sees
    exactly what the joint is commanded, so the integrator carries no memory offset across a
    reversal (eq 8's sum lets it, which shows as a held overshoot after steps);
-3. static inversion (seed 003 Fig 4) of the commanded angle ``theta_c = u_ff + u_fb``: each
+3. static inversion (Schreiber Fig 4) of the commanded angle ``theta_c = u_ff + u_fb``: each
    muscle's contraction from the pulley (``x_A = x_0 + r theta_c``, ``x_B = x_0 - r theta_c``),
    forces ``F_A,B = F_0 +- K theta_c / (2 r)`` (a common pretension force ``F_0`` plus what holds
-   the return spring ``K``), and each pressure from the Tondu-Lopez force law (seed 004 eq 1)
+   the return spring ``K``), and each pressure from the Tondu-Lopez force law (PAMInertial eq 1)
    ``p = F / c(x)``, ``c(x) = pi r_0^2 1e5 [a (1 - k x / L_0)^2 - b]`` [N/bar];
 4. the pressures limited to the ``[control]`` slew rate together (the valve that must move
    further sets the pace, the other moves by the same fraction, so a step does not twist the
@@ -117,7 +117,7 @@ class JointController:
         inverse: the inverse Preisach table (desired -> commanded angle, deg) or None: PID alone.
         limits: each valve's pressure range and slew rate.
         through_model: the PID's output goes through the inverse model (module docstring)
-            instead of being added to its output (seed 003 eq 8).
+            instead of being added to its output (Schreiber eq 8).
     """
 
     correction = None  # no learned correction on the joint

@@ -7,9 +7,9 @@ parameters (lists separated by ``/``); ``--duration`` repeats the protocol to fi
 default is one pass). A protocol that does not start at ``low`` is led in by a ramp from ``low``
 (the muscle starts vented), so no protocol asks the valve for a step it did not mean.
 
-* ``triangles``: seed 000 (Ai et al. 2019): triangles 0 -> 1, 2, 3, 4 bar at 0.05 Hz on the
+* ``triangles``: Ai2019: triangles 0 -> 1, 2, 3, 4 bar at 0.05 Hz on the
   default 0..4 bar range (``levels``, ``frequency`` [Hz]);
-* ``forc``: seed 003's first-order descending curves for a Preisach / Everett fit: from ``low``
+* ``forc``: Schreiber's first-order descending curves for a Preisach / Everett fit: from ``low``
   up to reversal points rising in ``curves`` equal steps to ``high``, each followed by the
   descending branch back to ``low``, at ``rate`` [range per s];
 * ``sines``: whole cycles around the middle of the range at every ``frequencies`` [Hz] and

@@ -1,7 +1,7 @@
 """Desired trajectories y_ref(t) [mm] from a short text spec (``pmactl edge run --reference``).
 
-* ``sine:amplitude=30,frequency=0.2,offset=40`` (mm, Hz, mm; seed 000 eq 18 / Table 4 by default)
-* ``ramp-sine:peak=30,frequency=1,offset=40,rise=10,hold=1``: seed 002 eq 33, a sine whose
+* ``sine:amplitude=30,frequency=0.2,offset=40`` (mm, Hz, mm; Ai2019 eq 18 / Table 4 by default)
+* ``ramp-sine:peak=30,frequency=1,offset=40,rise=10,hold=1``: Zhou2022 eq 33, a sine whose
   amplitude rises linearly to ``peak`` over ``rise`` s, holds for ``hold`` s, falls back to 0
 * ``const:value=40``
 * ``csv:PATH`` or a path ending in ``.csv``: columns ``t`` [s] and ``y_ref`` [mm], linearly
@@ -60,7 +60,7 @@ def sine(amplitude: float, frequency: float, offset: float) -> Callable[[float],
 def ramp_sine(
     peak: float, frequency: float, offset: float, rise: float, hold: float
 ) -> tuple[Callable[[float], float], float]:
-    """Seed 002 eq 33 (there: A = 14 k Ts up to 140 um over 2000 samples of 5 ms, 200 samples
+    """Zhou2022 eq 33 (there: A = 14 k Ts up to 140 um over 2000 samples of 5 ms, 200 samples
     at 140, then down): the amplitude ramps 0 -> peak over ``rise`` s, holds, ramps back."""
     omega = 2 * math.pi * frequency
 

@@ -1,7 +1,7 @@
 """The per-tick control law, pure: it fills the command fields of the tick's frame from its
 time and readings, with no I/O and no clock.
 
-Structure (seed 000 Fig 12, seed 003 eq 8): the desired trajectory goes through the inverse
+Structure (Ai2019 Fig 12, Schreiber eq 8): the desired trajectory goes through the inverse
 hysteresis model (feedforward, a lookup table), an optional neural correction (ONNX, see
 :mod:`edge.control.neural`) is added, then PID feedback on the measured output, then limits:
 pressure range and slew rate. :meth:`Controller.fill` works on the frame

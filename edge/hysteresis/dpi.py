@@ -1,4 +1,4 @@
-"""DPI: the digitized dual-operator Prandtl-Ishlinskii model (seed 002).
+"""DPI: the digitized dual-operator Prandtl-Ishlinskii model (Zhou2022).
 
 State: ``N`` fundamental operators ("digits") with a fill ``s_i`` in [0, 1]; ``s_i`` is the
 paper's binary digit ``b_i`` when the input moves in whole steps, a fraction in between.
@@ -10,7 +10,7 @@ significant filled digit first using the contraction pair. Between the all-empty
 when both pairs are equal (``dX_i = 2 (r_{i+1} - r_i)``, ``dY_i = dX_i * (w_0 + ... + w_i)``,
 ``s_i = (z_i - z_{i+1}) / dX_i + 1/2`` in play outputs ``z``), which the tests check.
 
-With unequal pairs, repeated cycles drift (seed 002 eqs 12-14). The turning-point compensator
+With unequal pairs, repeated cycles drift (Zhou2022 eqs 12-14). The turning-point compensator
 (eqs 15-20) fixes it: at every reversal the remaining branch is scaled so that completing it
 lands exactly on B1 (expansion) or B0 (contraction). The paper distributes the correction over
 the digits in proportion to their ``dY`` (``f(i) = dY_i / sum dY``), i.e. a common scale factor;
@@ -112,7 +112,7 @@ class DPIKernel:
         self.turn_x, self.turn_y = self.x, self.y
 
     def _turn(self, direction: int) -> None:
-        """Start a branch: compute the compensator scales (seed 002 eqs 15-20)."""
+        """Start a branch: compute the compensator scales (Zhou2022 eqs 15-20)."""
         self.mark_turn()
         self.direction = direction
         self.bx = self.by = 1.0
@@ -292,7 +292,7 @@ class DPIModel(HysteresisModel):
         k.turn_x, k.turn_y = np.asarray(state.get("turn_cursor", [k.x, k.y]), dtype=float).tolist()
 
     def inverse(self) -> DPIModel:
-        """Swap the X and Y of every pair and of the anchors (seed 002 eqs 21-22)."""
+        """Swap the X and Y of every pair and of the anchors (Zhou2022 eqs 21-22)."""
         p = self.params
         x0, y0, x1, y1 = self.anchors
         model = DPIModel(

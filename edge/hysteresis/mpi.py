@@ -1,6 +1,6 @@
-"""Modified PI model (Kuhnen; seed 000 eq 8): a PI model followed by a dead-zone shaper.
+"""Modified PI model (Kuhnen; Ai2019 eq 8): a PI model followed by a dead-zone shaper.
 
-Forward: ``y = s(PI[u])``; inverse: ``u = PI^-1[s^-1(y)]`` (seed 000 eq 12). The shaper ``s`` is
+Forward: ``y = s(PI[u])``; inverse: ``u = PI^-1[s^-1(y)]`` (Ai2019 eq 12). The shaper ``s`` is
 a :class:`~edge.hysteresis.shaper.MonotonePiecewiseLinear` (a dead-zone superposition plus
 offsets), so the inverse shaper is a swap of knot coordinates and the inverse PI comes from
 :func:`~edge.hysteresis.pi.inverse_pi_parameters`. The memory lives in the PI part only.

@@ -1,6 +1,6 @@
 """Play (backlash) operators and the classical Prandtl-Ishlinskii (PI) model.
 
-Model (seed 000 eqs 2-5, with the linear term written as a play of threshold 0)::
+Model (Ai2019 eqs 2-5, with the linear term written as a play of threshold 0)::
 
     z_i(k) = max(x(k) - r_i, min(x(k) + r_i, z_i(k-1)))      x = u - input_shift
     y(k)   = sum_i w_i z_i(k) + output_offset
@@ -8,7 +8,7 @@ Model (seed 000 eqs 2-5, with the linear term written as a play of threshold 0):
 with ``0 = r_0 < r_1 < ... < r_{n-1}``. The initial loading curve is
 ``phi(r) = sum_i w_i (r - r_i)^+``; the model is invertible when every partial sum
 ``S_i = w_0 + ... + w_i`` is positive. The inverse is again a PI model (derived from
-``phi^-1``, seed 000 eq 14 with the indices checked by composition in the tests)::
+``phi^-1``, Ai2019 eq 14 with the indices checked by composition in the tests)::
 
     r'_i = phi(r_i) = sum_{j<i} w_j (r_i - r_j)
     w'_0 = 1 / w_0,     w'_i = 1/S_i - 1/S_{i-1} = -w_i / (S_i S_{i-1})
@@ -31,7 +31,7 @@ from edge.hysteresis.table import LookupTable
 def exponential_pi_parameters(
     n: int, beta: float, delta: float, mu: float
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Seed 000 eq 5: thresholds ``r_i = beta*i`` and weights ``delta*exp(-mu*r_i)``, i=0..n-1."""
+    """Ai2019 eq 5: thresholds ``r_i = beta*i`` and weights ``delta*exp(-mu*r_i)``, i=0..n-1."""
     if n < 1 or beta <= 0 or delta <= 0:
         raise ModelError(f"exponential PI needs n>=1, beta>0, delta>0; got {n}, {beta}, {delta}")
     thresholds = beta * np.arange(n, dtype=float)

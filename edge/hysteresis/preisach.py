@@ -1,4 +1,4 @@
-"""Discrete Preisach model on an Everett map (seed 003 eqs 3-6).
+"""Discrete Preisach model on an Everett map (Schreiber eqs 3-6).
 
 Relays ``(a, b)`` with ``a >= b`` switch on when the input rises to ``a`` and off when it falls
 to ``b``. With 0/1 relays and density ``mu >= 0`` the Everett function

@@ -1,6 +1,6 @@
 """Memoryless monotone shapers: dead-zone superpositions and their piecewise-linear form.
 
-Dead-zone operator (seed 000 eq 6)::
+Dead-zone operator (Ai2019 eq 6)::
 
     S(x, g) = max(x - g, 0)  if g > 0
               x              if g = 0
@@ -9,7 +9,7 @@ Dead-zone operator (seed 000 eq 6)::
 and the superposition ``s(x) = sum_j v_j S(x, g_j)`` (eq 7) is a continuous piecewise-linear
 map through the origin whose slope changes by ``v_j`` at ``g_j``. It is stored here as knots
 ``(x_k, y_k)`` plus the slopes beyond the first and last knot, which makes inversion a swap of
-coordinates. :func:`dead_zone_form` recovers ``(g, v)`` from knots, so seed 000 eq 14
+coordinates. :func:`dead_zone_form` recovers ``(g, v)`` from knots, so Ai2019 eq 14
 (the inverse's thresholds and weights) is checked against the swap in the tests.
 """
 
@@ -24,7 +24,7 @@ from edge.errors import ModelError
 
 
 def dead_zone(x: NDArray[np.float64], threshold: float) -> NDArray[np.float64]:
-    """Seed 000 eq 6 evaluated on an array."""
+    """Ai2019 eq 6 evaluated on an array."""
     if threshold > 0:
         return np.maximum(x - threshold, 0.0)
     if threshold < 0:
@@ -58,7 +58,7 @@ class MonotonePiecewiseLinear:
 
     @classmethod
     def from_dead_zones(cls, thresholds: ArrayLike, weights: ArrayLike) -> MonotonePiecewiseLinear:
-        """Build from seed 000 eq 7: thresholds ``g_j`` (one of them 0) and weights ``v_j``."""
+        """Build from Ai2019 eq 7: thresholds ``g_j`` (one of them 0) and weights ``v_j``."""
         g = np.asarray(thresholds, dtype=float)
         v = np.asarray(weights, dtype=float)
         if g.shape != v.shape or not np.any(g == 0):

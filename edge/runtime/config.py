@@ -45,7 +45,7 @@ class LoopSection:
 
 @dataclass(frozen=True)
 class ControlSection:
-    """PID gains and command limits. Seed 000 Table 3 (Kp 1, Ki 0.01, Kd 0, per cm) is a start;
+    """PID gains and command limits. Ai2019 Table 3 (Kp 1, Ki 0.01, Kd 0, per cm) is a start;
     on the HIL rig Kp 0.05 bar/mm, Ki 0.5 bar/(mm s) tracks best with feedforward."""
 
     kp_bar_per_mm: float = 0.05
@@ -271,7 +271,7 @@ def _check_values(config: RigConfig) -> None:
         _in_range(src, "joint", name, getattr(joint, name), 1e-6, 1e6)
     _in_range(src, "joint", "return_stiffness_nm_per_rad", joint.return_stiffness_nm_per_rad, 0.0, 1e6)
     if not joint.tondu_a > joint.tondu_b > 0 or joint.tondu_k <= 0:
-        raise ConfigError(f"{src}: [joint] needs tondu_a > tondu_b > 0 and tondu_k > 0 (Tondu-Lopez, seed 004 eq 1)")
+        raise ConfigError(f"{src}: [joint] needs tondu_a > tondu_b > 0 and tondu_k > 0 (Tondu-Lopez, PAMInertial eq 1)")
     if config.rig.is_joint:
         try:
             joint.mount_contraction_mm()

@@ -28,7 +28,7 @@ from edge.runtime.recorder import CsvRecorder, meta_path
 from edge.runtime.run import EdgeRuntime
 from edge.runtime.summary import RunSummary
 
-DEFAULT_RANGE_BAR = (0.0, 4.0)  # seed 000's triangles reach 1, 2, 3, 4 bar
+DEFAULT_RANGE_BAR = (0.0, 4.0)  # Ai2019's triangles reach 1, 2, 3, 4 bar
 DEFAULT_RANGE_DEG = (-30.0, 30.0)  # a joint's commanded angle (hil joint_record: +-30 deg)
 DEFAULT_SAMPLE_HZ = 100.0  # the rate of the recordings the host tools were developed on
 

@@ -82,7 +82,7 @@ class EdgeRuntime:
         config: the validated rig config.
         bundle: the model bundle (its inverse table is the feedforward).
         reference: desired contraction [mm] over time.
-        feedforward: False runs PID alone (the comparison of seed 000 Table 5).
+        feedforward: False runs PID alone (the comparison of Ai2019 Table 5).
         use_correction: False ignores the bundle's ONNX correction.
         telemetry_path: where to write telemetry (None: none); ``{time}`` in it becomes the
             start time (UTC), so a service writes a new file per run.

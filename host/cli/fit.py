@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
         "--parameterisation",
         choices=["free", "exponential"],
         default="free",
-        help="pi and mpi: free play weights or seed 000's beta/delta/mu form",
+        help="pi and mpi: free play weights or Ai2019's beta/delta/mu form",
     )
     fit.add_argument(
         "--preisach-method",

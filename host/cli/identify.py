@@ -1,4 +1,4 @@
-"""``pmactl identify``: dynamic and static models beyond hysteresis (seed 004, seed 000 eqs 15-16).
+"""``pmactl identify``: dynamic and static models beyond hysteresis (PAMInertial, Ai2019 eqs 15-16).
 
 * ``identify fotd RUN.csv [RUN.csv ...]``: first-order-plus-dead-time from sinusoid harmonics,
   or from step / ramp responses;
@@ -26,7 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="K e^{-sL}/(1+sT) from sinusoids at several frequencies (or a step/ramp response)",
         description="First harmonics of u and y by least-squares Fourier fit on every sinusoidal segment "
         "(a stepped sine, or one run per frequency), then K, T, L with standard errors by weighted nonlinear "
-        "least squares, and the equivalent elliptic loss angle per frequency (seed 004).",
+        "least squares, and the equivalent elliptic loss angle per frequency (PAMInertial).",
     )
     fotd.add_argument("runs", nargs="+", metavar="RUN.csv", help="recordings with t, u, y")
     fotd.add_argument(
@@ -62,7 +62,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--model",
         required=True,
         choices=["tondu-lopez", "sarosi"],
-        help="static force law (seed 004 eq 1 or seed 000 eqs 15-16)",
+        help="static force law (PAMInertial eq 1 or Ai2019 eqs 15-16)",
     )
     force.add_argument(
         "--rest-length-mm", type=float, metavar="MM", help="rest length l0 [mm] (contraction ratio = y / l0)"

@@ -23,7 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
         "--model",
         required=True,
         choices=["hammerstein", "lstm-narmax", "correction"],
-        help="hammerstein (seed 000: MPI + BP net + ARX), lstm-narmax (seed 001), or correction "
+        help="hammerstein (Ai2019: MPI + BP net + ARX), lstm-narmax (Wu2025), or correction "
         "(the edge's inverse correction, added to --bundle)",
     )
     train.add_argument(

@@ -1,6 +1,6 @@
 """Baseline and extended models of the diagnosis, fitted on training rows only.
 
-Baseline (seed 000's Hammerstein structure without the neural net): a rate-independent
+Baseline (Ai2019's Hammerstein structure without the neural net): a rate-independent
 Preisach hysteresis ``x = rows @ E`` (non-negative cell masses), followed by all-pole ARX
 ``y(k) = sum a_i y(k-i) + b x(k) + c`` with ``na`` in 0..2 and time constants of at most
 :data:`MAX_TIME_CONSTANT_S`, the order chosen by AIC on the *simulation* error of the training

@@ -67,7 +67,7 @@ from host.identify.common import MemoryStart, memory_start
 __all__ = ["CAUSES", "Diagnosis", "detection_limits", "diagnose", "held_out_score", "limit_sentence", "prepare"]
 
 # first-order actuator (valve + mechanics) lag before the hysteresis, part of the baseline's
-# dynamics (seed 004: a PAM is a first-order lag plus a dead time); up to 250 ms, so that a plant
+# dynamics (PAMInertial: a PAM is a first-order lag plus a dead time); up to 250 ms, so that a plant
 # with more lag than a valve alone does not leave a lag a short dead time then "explains".
 # Negative: the recorded input is the driving pressure read through a first-order lag of its own
 # (a snubber or an RC filter on the transducer), undone by its inverse; at least half a sample.

@@ -135,7 +135,7 @@ def bound_asymmetry(
 class DPIEstimator(HysteresisEstimator):
     """Identify a :class:`~edge.hysteresis.dpi.DPIModel`.
 
-    As in seed 002, the pairs are identified from the branches without the compensator (one
+    As in Zhou2022, the pairs are identified from the branches without the compensator (one
     bounded least-squares problem) and the compensator acts online, at turning points, to keep
     the model from drifting. On a closed major loop it is inactive; on minor loops of an
     asymmetric model it rescales the branch, so the deployed model's minor loops can differ

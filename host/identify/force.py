@@ -1,11 +1,11 @@
-"""Static muscle force laws ``F(p, eps)`` identified by least squares (seed 004 eq 1, seed 000 eqs 15-16).
+"""Static muscle force laws ``F(p, eps)`` identified by least squares (PAMInertial eq 1, Ai2019 eqs 15-16).
 
 Both are estimators in scikit-learn's shape: ``__init__`` stores options, ``fit(pressure_bar,
 contraction_ratio, force_n)`` learns attributes ending in ``_`` and returns ``self``;
 ``predict`` gives the force and ``pressure`` the inverse (the pressure that makes a force at a
 contraction), which is what a joint's static inversion needs.
 
-Tondu-Lopez (seed 004 eq 1)::
+Tondu-Lopez (PAMInertial eq 1)::
 
     F = S p [a (1 - k eps)^2 - b],   S = pi r0^2
 
@@ -16,7 +16,7 @@ Tondu-Lopez (seed 004 eq 1)::
 ``a = c1^2 / (4 c2)``, ``k = -c1 / (2 a)``, ``b = a - c0``. Without the radius only ``S a`` and
 ``S b`` are identifiable (``area_m2`` is then 1 and ``a``, ``b`` are in m^2).
 
-Sarosi (seed 000 eq 15, Sarosi 2012)::
+Sarosi (Ai2019 eq 15, Sarosi 2012)::
 
     F = (p + a) e^{b kappa} + c p kappa + d p + e
 

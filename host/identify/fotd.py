@@ -1,15 +1,15 @@
-"""First-order-plus-dead-time models ``G(s) = K e^{-sL} / (1 + sT)`` from measured data (seed 004).
+"""First-order-plus-dead-time models ``G(s) = K e^{-sL} / (1 + sT)`` from measured data (PAMInertial).
 
 Two ways in, one result (:class:`FOTDFit`):
 
-* **Frequency response** (:func:`fit_frequency_response`): seed 004's method. The first harmonics
+* **Frequency response** (:func:`fit_frequency_response`): PAMInertial's method. The first harmonics
   of input and output at two or more frequencies (:mod:`host.identify.harmonics`) give
   ``G(jw_i)``; ``K, T, L`` minimise the weighted complex error
   ``sum_i |K e^{-jw_i L} / (1 + jw_i T) - G_i|^2 / s_i^2`` (real and imaginary parts stacked),
   ``s_i`` the harmonic's standard error floored at 2 % of ``|G_i|`` (hysteresis and other
   model error, not noise, dominate a real rig). Standard errors: ``(J^T J)^-1`` at the optimum
   scaled by the reduced chi-square ``chi2 / (2n - 3)``, so a model that does not fit says so
-  in its uncertainties. Seed 004 fitted ``k / (1 + jTw)`` to one harmonic and read the delay off
+  in its uncertainties. PAMInertial fitted ``k / (1 + jTw)`` to one harmonic and read the delay off
   a plot; with two or more frequencies the three parameters are identified together.
 * **Step / ramp response** (:func:`fit_time_response`): the fallback for records that are not
   sinusoidal (an inflation ramp, a step). The output is simulated as
@@ -142,7 +142,7 @@ def distinct_frequencies(harmonics: list[Harmonic]) -> list[float]:
 def fit_frequency_response(harmonics: list[Harmonic], hysteresis_phase: bool = True) -> FOTDFit:
     """Weighted nonlinear least squares of ``K, T, L`` on measured ``G(jw)`` (module docstring).
 
-    With ``hysteresis_phase`` the model is ``K e^{-j delta_h} e^{-jwL} / (1 + jwT)``: seed 004's
+    With ``hysteresis_phase`` the model is ``K e^{-j delta_h} e^{-jwL} / (1 + jwT)``: PAMInertial's
     equivalent elliptic hysteresis as a loss angle ``delta_h`` (0..90 degrees) that does not depend
     on the frequency, since rate-independent hysteresis lags the output by the same angle at
     every rate. Without it a hysteretic plant's phase at low frequency is blamed on T and L.

@@ -1,4 +1,4 @@
-"""First harmonics of sinusoidal test segments, by least-squares Fourier fit (seed 004 sec 4).
+"""First harmonics of sinusoidal test segments, by least-squares Fourier fit (PAMInertial sec 4).
 
 A record of sinusoids (one frequency, or several one after another: a stepped sine) is cut into
 segments of nearly equal input periods, found from the input's upward crossings of its median
@@ -12,7 +12,7 @@ trend, and the residual gives the harmonics' standard errors.
 The complex amplitude of ``a cos(wt) + b sin(wt)`` is ``X = a - j b`` (``x = Re{X e^{jwt}}``), and
 the frequency response is ``G(jw) = Y / U`` with its standard error by the delta method.
 
-The equivalent elliptic hysteresis (seed 004 eq 4, equality of the losses, sec 3.1): the loop of
+The equivalent elliptic hysteresis (PAMInertial eq 4, equality of the losses, sec 3.1): the loop of
 ``y`` against ``u`` over the whole periods encloses an area ``A``; the ellipse of the two first
 harmonics with the same area has ``sin(delta) = A / (pi U Y)`` (``U``, ``Y`` amplitudes), and
 ``delta`` is the loss angle. For a pure sinusoidal input it equals the first-harmonic phase lag
@@ -40,7 +40,7 @@ class Harmonic:
         start_s, stop_s: the analysed window [s] (whole periods).
         periods: periods in the window.
         input_amplitude, output_amplitude: first-harmonic amplitudes (units of u and y).
-        input_mean, output_mean: the continuous components (seed 004 Table 1, first row).
+        input_mean, output_mean: the continuous components (PAMInertial Table 1, first row).
         gain: ``|G(jw)| = Y/U`` (units of y per unit of u); ``gain_se`` its standard error.
         phase_rad: ``arg G(jw)`` in (-pi, pi]; negative is a lag; ``phase_se_rad`` its standard error.
         loss_angle_rad: equivalent elliptic loss angle (module docstring) [rad].

@@ -1,4 +1,4 @@
-"""Maxwell-slip friction (seed 004 sec 2.3): presliding hysteresis as N elastoplastic elements.
+"""Maxwell-slip friction (PAMInertial sec 2.3): presliding hysteresis as N elastoplastic elements.
 
 Element ``i`` is a spring of stiffness ``k_i`` [N per unit of position] whose stretch ``s_i`` slips
 once its force reaches the break force ``f_i`` [N]: with ``D_i = f_i / k_i`` the slip displacement,

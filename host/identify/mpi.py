@@ -61,10 +61,10 @@ class MPIEstimator(HysteresisEstimator):
 
     Args:
         n_operators: play operators of the PI part.
-        n_dead_zones: segments of the dead-zone shaper (seed 000 uses thresholds
+        n_dead_zones: segments of the dead-zone shaper (Ai2019 uses thresholds
             ``g_j = j/m * max``; here they are spread evenly over the output range).
         refine: run the output-error refinement (step 2).
-        parameterisation: PI weights ``"free"`` or seed 000's ``"exponential"``
+        parameterisation: PI weights ``"free"`` or Ai2019's ``"exponential"``
             (``w_i = delta exp(-mu beta i)``, thresholds ``beta i``; ``beta`` and ``mu`` searched
             on the equation error, ``delta`` takes the place of the weights in both steps).
         min_slope_ratio: bounds ``w_0 >= ratio * average slope`` and shaper slopes

@@ -2,7 +2,7 @@
 
 Thresholds ``r_i = i * (range / 2) / n`` (i = 0..n-1) for free weights; the output is linear in
 the weights and an offset, solved with bounds ``w_0 > 0``, ``w_i >= 0`` (which keeps the model
-invertible). The 3-parameter form of seed 000 eq 5 (``r_i = beta*i``,
+invertible). The 3-parameter form of Ai2019 eq 5 (``r_i = beta*i``,
 ``w_i = delta*exp(-mu*r_i)``) is fitted by variable projection: for each ``beta`` on a grid
 the play outputs are computed once, ``mu`` is searched on a bracket and ``delta`` and the offset
 are linear.
@@ -44,7 +44,7 @@ class PIEstimator(HysteresisEstimator):
 
     Args:
         n_operators: number of play operators (the first has threshold 0, the linear term).
-        parameterisation: ``"free"`` weights or seed 000's 3-parameter ``"exponential"``.
+        parameterisation: ``"free"`` weights or Ai2019's 3-parameter ``"exponential"``.
         min_slope_ratio: lower bound of ``w_0`` (the slope right after a reversal) relative to
             the average slope; see :data:`host.identify.common.MIN_SLOPE_DOC`.
     """
@@ -108,7 +108,7 @@ class PIEstimator(HysteresisEstimator):
 def exponential_search(
     u: NDArray[np.float64], start: MemoryStart, n: int, cost_of_column: Callable[[NDArray[np.float64]], float]
 ) -> tuple[float, float]:
-    """``(beta, mu)`` of seed 000 eq 5 minimising ``cost_of_column(plays @ exp(-mu r))``.
+    """``(beta, mu)`` of Ai2019 eq 5 minimising ``cost_of_column(plays @ exp(-mu r))``.
 
     ``cost_of_column`` solves the linear rest of the problem (``delta``, offsets, ...) for the
     summed play column with unit ``delta`` and returns its squared residual. For each ``beta``

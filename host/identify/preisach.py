@@ -6,7 +6,7 @@ masses ``mu >= 0``. Walking the turning-point stack over the data gives one regr
 sample; the normal equations are accumulated in chunks (memory independent of the data length)
 and solved with ``mu >= 0`` (diagonal cells > 0 so that the inverse exists).
 
-``method="forc"`` (Mayergoyz, seed 003): every descending branch that starts from the ascending
+``method="forc"`` (Mayergoyz, Schreiber): every descending branch that starts from the ascending
 major branch (its preceding minimum at the bottom of the range) is a first-order reversal curve
 and gives ``E(alpha, beta) = y(alpha) - y(alpha, beta)`` directly; the values are interpolated
 onto the grid, then projected onto non-negative cell masses.

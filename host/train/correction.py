@@ -272,7 +272,7 @@ def working_range_recording(seed: int = 11, duration_s: float = 140.0, rate_hz: 
     """Open-loop sines over the emulated rig's whole working range, 0.1-5.9 bar at 0.05-1 Hz.
 
     The correction can only correct references its training covered. The HIL's ``sines``
-    protocol stays within 0.2-3.8 bar (about 58 mm), while seed 000's tracking test asks for
+    protocol stays within 0.2-3.8 bar (about 58 mm), while Ai2019's tracking test asks for
     70 mm (about 5.8 bar), so this drives the emulated plant (``hil.plant``, default rig) with
     whole sine cycles over the rig's pressure limits, in a seeded random order, sampled with
     the sensor noise of ``pmactl hil record``.

@@ -1,16 +1,16 @@
-"""Hammerstein model (seed 000): MPI operator -> BP net 2-5-10-1 on [u, y_MPI] -> ARX.
+"""Hammerstein model (Ai2019): MPI operator -> BP net 2-5-10-1 on [u, y_MPI] -> ARX.
 
 * The MPI operator is identified as ``pmactl fit --model mpi`` does (from the known memory start).
-* The BP net (tanh, 2-5-10-1 as in seed 000 Fig 7) maps the extended input ``[u, y_MPI]`` to
+* The BP net (tanh, 2-5-10-1 as in Ai2019 Fig 7) maps the extended input ``[u, y_MPI]`` to
   what the operator gets wrong: ``v = y_MPI + net(u, y_MPI)``. Its last layer starts at zero,
   so training starts from the MPI model and early stopping can only keep an improvement (from
   random weights the net never got back to the operator's own held-out error on the HIL).
   It is trained with **L-BFGS** on the whole training part at once: 81 weights and a smooth
   full-batch loss are where a quasi-Newton method converges in tens of iterations,
-  deterministically and without a learning rate to tune (seed 000's BP gradient descent
+  deterministically and without a learning rate to tune (Ai2019's BP gradient descent
   reaches the same minimum far more slowly). Early stopping: every epoch (5 L-BFGS
   iterations) scores the held-out tail.
-* The ARX part (seed 000 eqs 9-11) gives the dynamics:
+* The ARX part (Ai2019 eqs 9-11) gives the dynamics:
   ``y(k) = sum_{i=1..na} a_i y(k-i) + sum_{j=0..nb-1} b_j v(k-j)`` with v the net output,
   unit static gain, no offset (the net carries the statics) and ``b >= 0`` (a lag; see
   ``fit_arx``). Orders ``na in 0..3``, ``nb in 1..3``

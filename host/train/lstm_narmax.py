@@ -1,13 +1,13 @@
-"""LSTM-NARMAX (seed 001): an LSTM over NARMAX regressors with a tanh-input PI operator.
+"""LSTM-NARMAX (Wu2025): an LSTM over NARMAX regressors with a tanh-input PI operator.
 
-Regressors at step k (seed 001: hv = 2, hn = 2, hy = 1)::
+Regressors at step k (Wu2025: hv = 2, hn = 2, hy = 1)::
 
     [v(k), v(k-1), n(k), n(k-1), y(k-1)]
 
 with v the input, n the tanh-input PI operator's output (:mod:`host.train.operators`) and y the
 output. An LSTM (hidden 7) and a linear head give ``y(k) = n(k) + head(h(k))``: the net learns
 what the rate-independent operator misses (its output is already in output units), which keeps
-the head small and the start of training sane. Seed 001 feeds n as a regressor too; the skip is
+the head small and the start of training sane. Wu2025 feeds n as a regressor too; the skip is
 our choice.
 
 Training, in two phases, Adam (the LSTM's loss surface is non-convex and minibatched); the

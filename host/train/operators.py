@@ -1,8 +1,8 @@
 """The identified hysteresis operators the neural models are built on.
 
-* Hammerstein (seed 000): the MPI model (play operators + dead-zone shaper), identified by
+* Hammerstein (Ai2019): the MPI model (play operators + dead-zone shaper), identified by
   :class:`host.identify.MPIEstimator` exactly as ``pmactl fit --model mpi`` does.
-* LSTM-NARMAX (seed 001): a PI operator on the *tanh-warped* input
+* LSTM-NARMAX (Wu2025): a PI operator on the *tanh-warped* input
   ``s = tanh((u - centre) / half_range)``: the warp compresses the ends of the input range, so
   the plays' loops narrow where the actuator saturates. Its weights are identified by the same
   constrained least squares as ``pmactl fit --model pi``, on ``(s, y)``.
@@ -58,7 +58,7 @@ class IdentifiedOperator:
 
 
 def identify_mpi(u: NDArray[np.float64], y: NDArray[np.float64]) -> IdentifiedOperator:
-    """Seed 000's MPI, as ``pmactl fit --model mpi``."""
+    """Ai2019's MPI, as ``pmactl fit --model mpi``."""
     estimator = MPIEstimator().fit(u, y)
     operator = Operator(estimator.model_, "mpi")
     return IdentifiedOperator(operator, estimator.start_index_, estimator.start_branch_, estimator.fit_seconds_)
@@ -69,7 +69,7 @@ WARP_SHIFTS = (-0.75, -0.5, -0.25, 0.0, 0.25, 0.5)
 
 
 def identify_tanh_pi(u: NDArray[np.float64], y: NDArray[np.float64], n_operators: int = 10) -> IdentifiedOperator:
-    """Seed 001's tanh-input PI operator (see module docstring).
+    """Wu2025's tanh-input PI operator (see module docstring).
 
     The warp ``tanh(gain * (u - centre) / half_range)`` has its gain and centre chosen on a small
     grid by the training fit (RMSE from the memory start): where the warp's knee sits decides
