@@ -10,14 +10,17 @@ wrong on B (``--test`` takes globs).
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import warnings
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 from edge.errors import DataError
+from host.cli.options import add_data_options, expand_runs, read_measurement
+
+if TYPE_CHECKING:
+    from host.data import Measurement
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -56,6 +59,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "(3x the time)",
     )
 
+    add_data_options(diag)
+
     def run_lazily(args: argparse.Namespace) -> int:
         return run(args)
 
@@ -64,9 +69,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _write_json(target: str, payload: object) -> None:
     """Strict JSON (no NaN or Infinity: non-finite numbers are written as null)."""
-    from host.diagnose.run import finite_or_null
+    from host.cli.outputs import strict_json
 
-    text = json.dumps(finite_or_null(payload), indent=2, default=float, allow_nan=False) + "\n"
+    text = strict_json(payload, indent=2, default=float) + "\n"
     if target == "-":
         sys.stdout.write(text)
         return
@@ -74,28 +79,11 @@ def _write_json(target: str, payload: object) -> None:
     Path(target).write_text(text)
 
 
-def expand(patterns: list[str]) -> list[str]:
-    """File names from names and globs (a shell that did not expand one, or a quoted one), in
-    sorted order per pattern; a pattern that matches nothing is one clear error."""
-    import glob
-
-    out: list[str] = []
-    for pattern in patterns:
-        if any(ch in pattern for ch in "*?[") and not Path(pattern).exists():
-            found = sorted(glob.glob(pattern))
-            if not found:
-                raise DataError(f"{pattern}: no file matches this pattern; check the folder and the spelling")
-            out += found
-        else:
-            out.append(pattern)
-    return out
-
-
 def run(args: argparse.Namespace) -> int:
-    args.data = expand(list(args.data))
-    args.test = expand(list(args.test))
+    args.data = expand_runs(list(args.data), "run")
+    args.test = expand_runs(list(args.test), "--test")
     if args.train:
-        trains = expand([args.train])
+        trains = expand_runs([args.train], "--train")
         if len(trains) > 1:
             raise DataError(
                 f"--train {args.train} matches {len(trains)} files; cross-run takes one training recording. To "
@@ -131,11 +119,10 @@ def run(args: argparse.Namespace) -> int:
         return _cross_run(args, say, progress)
     if not args.data:
         raise DataError("name a recording (pmactl diagnose DATA.csv) or use --train A.csv --test B.csv")
-    from host.data import load_measurement
     from host.diagnose.run import diagnose
     from host.diagnose.stability import diagnose_with_stability
 
-    measurement = load_measurement(args.data[0])
+    measurement = read_measurement(args.data[0], args)
     run_diagnosis = diagnose_with_stability if args.stability else diagnose
     result = run_diagnosis(measurement, folds=args.folds, progress=progress)
     name = Path(args.data[0]).name
@@ -171,23 +158,14 @@ def run(args: argparse.Namespace) -> int:
         say(f"  signature {cause:<18} p = {sig['p_value']:.2g}: {sig['detail']}")
     for note in measurement.notes + result.notes:
         say(f"  note: {note}")
-    try:
-        if args.json:
-            _write_json(args.json, result.as_json())
-            if not to_stdout:
-                say(f"  JSON written to {args.json}")
-        if args.report:
-            from host.diagnose.report import write_report
+    from host.diagnose.report import write_report
 
-            say(f"  report written to {write_report(result, args.report, name)}")
-    except OSError as exc:
-        raise DataError(f"cannot write the results ({exc}); choose a writable --json / --report path") from exc
+    _write_results(args, say, result.as_json(), lambda: write_report(result, args.report, name))
     return 0
 
 
 def _runs_v3(args: argparse.Namespace) -> int:
     """Diagnosis v3 of one or more runs: the verdict, the evidence per cause, the held-out gain."""
-    from host.data import load_measurement
     from host.diagnose.v3 import diagnose_runs
 
     if args.folds is not None:
@@ -196,7 +174,7 @@ def _runs_v3(args: argparse.Namespace) -> int:
     say = (lambda *a: print(*a, file=sys.stderr)) if to_stdout else print
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        runs = [load_measurement(path) for path in args.data]
+        runs = [read_measurement(path, args) for path in args.data]
     if caught:  # one line, not one per run
         first = str(caught[0].message)
         more = f" (and {len(caught) - 1} more like it)" if len(caught) > 1 else ""
@@ -220,26 +198,38 @@ def _runs_v3(args: argparse.Namespace) -> int:
         say(f"  note: {run_notes[0]}" + (f" (and {len(run_notes) - 1} more run notes)" if len(run_notes) > 1 else ""))
     for note in result.notes:
         say(f"  note: {note}")
-    try:
-        if args.json:
-            _write_json(args.json, result.as_json())
-            if not to_stdout:
-                say(f"  JSON written to {args.json}")
-        if args.report:
-            from host.diagnose.report_v3 import write_report_v3
+    from host.diagnose.report_v3 import write_report_v3
 
-            say(f"  report written to {write_report_v3(result, args.report, title)}")
-    except OSError as exc:
-        raise DataError(f"cannot write the results ({exc}); choose a writable --json / --report path") from exc
+    _write_results(args, say, result.as_json(), lambda: write_report_v3(result, args.report, title, _output_unit(runs)))
     return 0
 
 
+def _output_unit(runs: list[Measurement]) -> str:
+    """The output's unit for the report's axes: the runs' own (from --units or a header suffix)."""
+    units = {m.units.get("y") for m in runs} - {None}
+    return str(units.pop()) if len(units) == 1 else "units of y"
+
+
+def _write_results(
+    args: argparse.Namespace, say: Callable[..., None], payload: object, write_report: Callable[[], Path]
+) -> None:
+    """``--json`` (a file, or ``-`` for stdout) and ``--report``; a path that cannot be written is one error."""
+    try:
+        if args.json:
+            _write_json(args.json, payload)
+            if args.json != "-":
+                say(f"  JSON written to {args.json}")
+        if args.report:
+            say(f"  report written to {write_report()}")
+    except OSError as exc:
+        raise DataError(f"cannot write the results ({exc}); choose a writable --json / --report path") from exc
+
+
 def _cross_run(args: argparse.Namespace, say: Callable[..., None], progress: bool | None) -> int:
-    from host.data import load_measurement
     from host.diagnose.crossrun import cross_run
 
-    train = load_measurement(args.train)
-    tests = [load_measurement(path) for path in args.test]
+    train = read_measurement(args.train, args)
+    tests = [read_measurement(path, args) for path in args.test]
     results = cross_run(train, tests, progress=progress)
     for path, result in zip(args.test, results):
         say(f"{Path(args.train).name} -> {Path(path).name}: cause {result.cause}")
