@@ -1,6 +1,6 @@
 """pmactl edge runtime: what runs on the rig's single-board computer.
 
-Imports only numpy (plus onnxruntime, smbus2, pyserial and gpiod in the runtime parts).
+Imports only numpy (plus onnxruntime, onnx, smbus2, pyserial, gpiod, foxglove-sdk in the runtime parts).
 Never imports ``host``, ``hil`` or ``models_export``.
 """
 

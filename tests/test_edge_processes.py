@@ -131,7 +131,7 @@ print("ok")
 
 # what an SBC with only pmactl[edge] lacks: the host extra's packages (the pmactl package itself,
 # host/ included, is installed there; its console script is host.cli:main)
-NOT_ON_THE_SBC = ("hil", "scipy", "torch", "matplotlib", "ray", "onnx", "tqdm", "asyncssh", "models_export")
+NOT_ON_THE_SBC = ("hil", "scipy", "torch", "matplotlib", "ray", "tqdm", "asyncssh", "models_export")
 
 
 def test_the_pmactl_console_script_runs_edge_commands_on_an_edge_only_install(tmp_path, bundle):
