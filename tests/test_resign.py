@@ -108,7 +108,8 @@ def test_quantise_on_a_signed_store_re_signs_with_key_and_warns_without(fitted, 
     calibration = str(example_path("test"))
     status, out, err = cli(capsys, "quantise", store, "--calibration", calibration, "--key", private)
     assert status == 0 and err == "" and "signed the new release" in out
-    assert load_bundle(store, trusted_keys=[public]).manifest["correction"]["quantisation"]["kept"]
+    correction = load_bundle(store, trusted_keys=[public]).manifest["correction"]
+    assert correction["quantisation"]["kept"] and correction["coverage"]["reference_mm"]  # coverage kept
 
 
 def test_quantise_without_key_names_the_unsigned_release(fitted, tmp_path, capsys):

@@ -167,5 +167,9 @@ def _run_correction(args: argparse.Namespace) -> int:
         f"held-out tail RMSE {result.tail_rmse_bar:.4f} bar (feedforward alone {result.tail_rmse_ff_bar:.4f} bar); "
         f"added to {args.bundle} (features {', '.join(result.features)})"
     )
+    print(
+        f"training data {result.coverage_line()}; the edge warns before arming when a reference leaves that "
+        "(record sines over the working range: pmactl edge record --protocol sines)"
+    )
     report_signing(args.bundle, args.key, signed_before, json_output=False)
     return 0
