@@ -41,11 +41,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def add_key_option(parser: argparse.ArgumentParser, what: str) -> None:
-    """``--key KEY``: sign the release ``what`` writes (a command that makes a release takes it)."""
+    """``--key KEY``: sign the new release the command writes (``what`` says which, in --help)."""
     parser.add_argument(
         "--key",
         metavar="KEY",
-        help=f"pmactl.key from pmactl keygen: sign the new release {what} writes (without it, a signed "
+        help=f"pmactl.key from pmactl keygen: sign the new release {what} (without it, a signed "
         "bundle gets an unsigned release and the command says how to sign it)",
     )
 

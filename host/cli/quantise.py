@@ -24,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
         help="recording (t,u,y) for calibration and scoring",
     )
     quantise.add_argument("--json", action="store_true", help="print one JSON object")
-    add_key_option(quantise, "(the bundle's release with the measured, chosen variant)")
+    add_key_option(quantise, "that holds the measured, chosen variant")
     add_data_options(quantise, units=False)
     quantise.set_defaults(run=lazy("host.cli.quantise"))
 

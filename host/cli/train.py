@@ -45,7 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
     train.add_argument("--bundle", metavar="DIR", help="correction only: the bundle whose feedforward it corrects")
     train.add_argument("--json", action="store_true", help="print one JSON object (no progress bar)")
     train.add_argument("--save", metavar="DIR", help="write step.onnx, model.json, operator.npz, training_curve.png")
-    add_key_option(train, "(--model correction: the bundle's release with the correction)")
+    add_key_option(train, "of --bundle that holds the correction (--model correction)")
     add_data_options(train)
     train.set_defaults(run=lazy("host.cli.train"))
 
