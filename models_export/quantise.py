@@ -23,7 +23,6 @@ beside the old one and swapped in).
 
 from __future__ import annotations
 
-import json
 import logging
 import shutil
 import statistics
@@ -35,7 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from edge.errors import BundleError
-from edge.runtime.bundle import MANIFEST, resolve_release
+from edge.runtime.bundle import load_bundle
 from models_export.bundle import add_correction
 from models_export.onnx_step import session
 
@@ -143,8 +142,8 @@ def quantise_bundle(
 ) -> dict[str, object]:
     """Measure the variants on ``(features, target)``, apply the rule, record it (module docstring)."""
     bundle = Path(bundle_dir)
-    release = resolve_release(bundle)  # a bundle directory is releases/ + current (models_export.store)
-    manifest = json.loads((release / MANIFEST).read_text())
+    loaded = load_bundle(bundle)  # verified, format_version checked, ``current`` resolved once
+    release, manifest = loaded.path, loaded.manifest
     spec = manifest.get("correction")
     if not isinstance(spec, dict):
         raise BundleError(f"{bundle}: no correction to quantise; train one with pmactl train --model correction")

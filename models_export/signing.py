@@ -18,7 +18,7 @@ from cryptography.hazmat.primitives import serialization
 from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
 
 from edge.errors import BundleError
-from edge.runtime.bundle import MANIFEST, SIGNATURE, key_id, resolve_release
+from edge.runtime.bundle import MANIFEST, SIGNATURE, key_id, read_signature, resolve_release
 from models_export.store import fsync_path
 
 PRIVATE_KEY = "pmactl.key"
@@ -80,3 +80,50 @@ def sign_release(directory: str | Path, key_path: str | Path) -> tuple[Path, str
     os.replace(temporary, release / SIGNATURE)
     fsync_path(release)
     return release, key_id(raw)
+
+
+def signer_of(directory: str | Path) -> str | None:
+    """Key id named by the signature of the release at ``directory`` (or its ``current``),
+    ``None`` when it is unsigned. The signature is not verified here (loading does that)."""
+    record = read_signature(resolve_release(directory))
+    if record is None:
+        return None
+    try:
+        return key_id(base64.b64decode(record["public_key"], validate=True))
+    except ValueError as exc:
+        raise BundleError(
+            f"{resolve_release(directory) / SIGNATURE}: unreadable public key ({exc}); "
+            "sign again with pmactl bundle sign"
+        ) from exc
+
+
+def sign_command(directory: str | Path) -> str:
+    """The command that signs the current release of ``directory`` (``pmactl bundle sign``)."""
+    import shlex
+
+    return f"pmactl bundle sign {shlex.quote(str(directory))} --key {PRIVATE_KEY}"
+
+
+def after_new_release(
+    directory: str | Path, key_path: str | Path | None, signed_before: str | None
+) -> tuple[str, bool]:
+    """Sign the release a command just wrote at ``directory``, or say that it is unsigned.
+
+    With ``key_path`` the new current release is signed (:func:`sign_release`). Without it,
+    a store whose previous release was signed (``signed_before``: its key id) now runs an
+    unsigned release, which a rig that trusts keys refuses: the returned line says so and
+    gives the command. Returns (one line for the user, True when it is a warning); the line
+    is empty when the store was never signed and no key was given.
+    """
+    if key_path is not None:
+        release, signer = sign_release(directory, key_path)
+        was = f" (the previous release was signed by {signed_before})" if signed_before not in (None, signer) else ""
+        return f"signed the new release {release.name} with key {signer}{was}", False
+    if signed_before is None:
+        return "", False
+    release = resolve_release(directory)
+    return (
+        f"the new release {release.name} is UNSIGNED (the one before was signed by key {signed_before}); "
+        f"sign it: {sign_command(directory)} (or pass --key next time)",
+        True,
+    )

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from edge import __version__
 from edge.errors import BundleError
 from edge.hysteresis.lut import CompiledModel, LookupTable, read_table
 
@@ -230,15 +231,33 @@ def _parse_manifest(manifest_path: Path, raw: bytes) -> dict[str, object]:
         raise BundleError(
             f"{manifest_path}: the manifest is a JSON {type(manifest).__name__}, not an object; re-export the bundle"
         )
-    if manifest.get("format") != FORMAT or manifest.get("format_version") not in READABLE_VERSIONS:
+    if manifest.get("format") != FORMAT:
         raise BundleError(
-            f"{manifest_path}: format {manifest.get('format')!r} v{manifest.get('format_version')} "
-            f"is not {FORMAT} v{FORMAT_VERSION}; re-export with this pmactl version"
+            f"{manifest_path}: format {manifest.get('format')!r} is not {FORMAT}; "
+            "point at a directory written by pmactl fit --save"
         )
+    check_format_version(manifest_path, manifest.get("format_version"))
     if not isinstance(manifest.get("files"), dict):
         found = type(manifest.get("files")).__name__
         raise BundleError(f"{manifest_path}: 'files' must map file names to entries, found a {found}; re-export")
     return manifest
+
+
+def check_format_version(manifest_path: Path, version: object) -> None:
+    """Refuse a ``format_version`` this pmactl does not read, naming it and the fix.
+
+    A bool is refused too (JSON ``true`` would otherwise pass as version 1).
+    """
+    if type(version) is int and version in READABLE_VERSIONS:
+        return
+    readable = ", ".join(str(v) for v in READABLE_VERSIONS)
+    if type(version) is int and version > FORMAT_VERSION:
+        fix = f"a newer pmactl wrote it: upgrade pmactl here (pip install -U pmactl; this is {__version__})"
+    else:
+        fix = "re-export it with pmactl fit --save"
+    raise BundleError(
+        f"{manifest_path}: manifest format_version {version!r} is not one this pmactl reads ({readable}); {fix}"
+    )
 
 
 def _confined(release: Path, name: object, manifest_path: Path) -> Path:

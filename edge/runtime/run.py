@@ -28,6 +28,7 @@ from edge.control.tick import Controller, Limits, Readings
 from edge.errors import BusError, DataError
 from edge.runtime.bundle import Bundle
 from edge.runtime.config import RigConfig
+from edge.runtime.coverage import outside_coverage, read_coverage
 from edge.runtime.frame import frame_layout
 from edge.runtime.live import LiveView
 from edge.runtime.recorder import CsvRecorder
@@ -167,13 +168,18 @@ class EdgeRuntime:
         self.on_tick: list[Callable[[float], None]] = []  # run before each tick's read (tests inject faults)
         self.errors = ErrorStats()  # the running tracking-error sums (a status line reads them)
         self.on_warning: list[Callable[[str], None]] = []  # each warning once, as it happens (the CLI prints)
-        self.warnings: list[str] = []  # before arming: a reference beyond the bundle's reach
+        self.warnings: list[str] = []  # before arming: a reference beyond the bundle's reach or its correction's data
         inverse_model = self.controller.inverse
         if inverse_model is not None:
             length = reference.duration_s or REACH_CHECK_S
             reach = beyond_reach(reference, length, tuple(inverse_model.input_range), self.unit)  # type: ignore[arg-type]
             if reach:
                 self.warnings.append(reach)
+        coverage = read_coverage(bundle.correction_spec, str(bundle.path)) if bundle is not None else None
+        if coverage is not None and self.controller.correction is not None:
+            outside = outside_coverage(reference, reference.duration_s or REACH_CHECK_S, coverage, self.unit)
+            if outside:
+                self.warnings.append(outside)
 
     def _header(self) -> dict[str, object]:
         spec = self.config.rig

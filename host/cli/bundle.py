@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from host.cli.outputs import strict_json
@@ -37,6 +38,38 @@ def register(sub: argparse._SubParsersAction) -> None:
     inspect.add_argument("directory", metavar="DIR", help="bundle directory (or one release)")
     inspect.add_argument("--json", action="store_true", help="print one JSON object")
     inspect.set_defaults(run=run_inspect)
+
+
+def add_key_option(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--key KEY``: sign the new release the command writes (``what`` says which, in --help)."""
+    parser.add_argument(
+        "--key",
+        metavar="KEY",
+        help=f"pmactl.key from pmactl keygen: sign the new release {what} (without it, a signed "
+        "bundle gets an unsigned release and the command says how to sign it)",
+    )
+
+
+def signing_state(directory: str | Path, key: str | None) -> str | None:
+    """Before a command writes a release: refuse an unusable ``--key`` (nothing trained or written
+    yet) and return the key id that signed the current release (``None``: unsigned)."""
+    from models_export.signing import read_private_key, signer_of
+
+    if key is not None:
+        read_private_key(Path(key))
+    return signer_of(directory)
+
+
+def report_signing(directory: str | Path, key: str | None, signed_before: str | None, *, json_output: bool) -> None:
+    """After a command wrote a release: sign it with ``key``, or print the one-line notice that it
+    is unsigned (stderr); the confirmation goes to stdout unless the command prints JSON."""
+    from models_export.signing import after_new_release
+
+    line, warning = after_new_release(directory, key, signed_before)
+    if line:
+        print(
+            f"pmactl: warning: {line}" if warning else line, file=sys.stderr if warning or json_output else sys.stdout
+        )
 
 
 def run_keygen(args: argparse.Namespace) -> int:

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from edge.errors import DataError
+from host.cli.bundle import add_key_option, report_signing, signing_state
 from host.cli.lazy import lazy
 from host.cli.options import add_data_options, expand_runs, read_measurement, read_options
 from host.cli.outputs import OutputPathError, check_output, strict_json
@@ -44,6 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
     train.add_argument("--bundle", metavar="DIR", help="correction only: the bundle whose feedforward it corrects")
     train.add_argument("--json", action="store_true", help="print one JSON object (no progress bar)")
     train.add_argument("--save", metavar="DIR", help="write step.onnx, model.json, operator.npz, training_curve.png")
+    add_key_option(train, "of --bundle that holds the correction (--model correction)")
     add_data_options(train)
     train.set_defaults(run=lazy("host.cli.train"))
 
@@ -61,6 +63,11 @@ def run(args: argparse.Namespace) -> int:
         return _run_correction(args)
     if args.bundle:
         raise DataError("--bundle applies to --model correction only; use --save DIR for a trained model")
+    if args.key:
+        raise DataError(
+            f"--key signs a bundle's new release, and --model {args.model} writes none (--save writes a model "
+            "folder: step.onnx, model.json); drop --key"
+        )
     if not 0 < args.calibration < 0.9:
         raise DataError(f"--calibration {args.calibration} must be between 0 and 0.9")
     import numpy as np
@@ -126,7 +133,14 @@ def run(args: argparse.Namespace) -> int:
 
 def _check_save(path: str) -> None:
     """Refuse a --save folder that cannot be written, has no parent, or already holds a model."""
+    from models_export.store import is_store
+
     check_output(path, "--save", kind="dir")
+    if Path(path).is_dir() and is_store(Path(path)):
+        raise OutputPathError(
+            f"--save {path}: is a bundle directory (releases/, current); a trained model goes to a folder of its "
+            "own, choose a new one (for the correction, the bundle is --bundle)"
+        )
     if (Path(path) / "model.json").exists():
         raise OutputPathError(
             f"--save {path}: already holds a model (model.json); choose a new folder, or move the old model away first"
@@ -138,6 +152,7 @@ def _run_correction(args: argparse.Namespace) -> int:
 
     if not args.bundle:
         raise DataError("--model correction needs --bundle DIR: the bundle whose feedforward it corrects")
+    signed_before = signing_state(args.bundle, args.key)  # a bad --key is refused before training
     records = [read_measurement(path, args) for path in args.train]
     result = train_correction_into(args.bundle, records, seed=args.seed, epochs=args.epochs, quiet=args.json)
     if args.save:
@@ -145,10 +160,16 @@ def _run_correction(args: argparse.Namespace) -> int:
         result.curve.save_png(Path(args.save) / "training_curve.png", "correction training")
     if args.json:
         print(strict_json(result.as_dict()))
+        report_signing(args.bundle, args.key, signed_before, json_output=True)
         return 0
     print(
         f"correction trained on {', '.join(Path(p).name for p in args.train)} in {result.fit_seconds:.1f} s: "
         f"held-out tail RMSE {result.tail_rmse_bar:.4f} bar (feedforward alone {result.tail_rmse_ff_bar:.4f} bar); "
         f"added to {args.bundle} (features {', '.join(result.features)})"
     )
+    print(
+        f"training data {result.coverage_line()}; the edge warns before arming when a reference leaves that "
+        "(record sines over the working range: pmactl edge record --protocol sines)"
+    )
+    report_signing(args.bundle, args.key, signed_before, json_output=False)
     return 0

@@ -15,7 +15,10 @@ gradient, one BLAS thread) instead of back-propagation through a closed loop (sp
 inverse learning), and needs no torch (the graph is written with onnx's helper API); and it
 reuses the bundle's table, so it corrects the feedforward the edge really runs. Its limit: a
 recording's ``(y, dy/dt)`` must cover the references it will meet (record sines over the
-working range and rates, e.g. the HIL's ``sines`` scenario).
+working range and rates: ``pmactl edge record --protocol sines``, the HIL's ``sines``
+scenario). What the training data covered (:func:`coverage_of`) goes into the manifest's
+correction entry; the edge warns before arming when a run's reference leaves it
+(:mod:`edge.runtime.coverage`).
 
 The y signal is smoothed (Savitzky-Golay, ``SMOOTHING_S``) before differentiating: the edge's
 reference is smooth, a measured contraction carries sensor noise.
@@ -116,6 +119,7 @@ class CorrectionResult:
     tail_rmse_ff_bar: float
     samples: int
     curve: Curve
+    coverage: dict[str, list[float]]
     model_path: Path | None = None
 
     def as_dict(self) -> dict[str, object]:
@@ -126,7 +130,24 @@ class CorrectionResult:
             "samples": self.samples,
             "tail_rmse_bar": self.tail_rmse_bar,
             "feedforward_only_tail_rmse_bar": self.tail_rmse_ff_bar,
+            "coverage": self.coverage,
         }
+
+    def coverage_line(self, unit: str = "mm") -> str:
+        """What the training data covers, in words (the references the correction has seen)."""
+        (lo, hi), (rlo, rhi) = self.coverage["reference_mm"], self.coverage["reference_rate_mm_s"]
+        return f"covers references {lo:.1f}..{hi:.1f} {unit} at rates {rlo:.1f}..{rhi:.1f} {unit}/s"
+
+
+def coverage_of(features: NDArray[np.float64]) -> dict[str, list[float]]:
+    """The references a correction's training data covers: the range [mm] of its smoothed
+    contraction and the range [mm/s] of its rate (features in :data:`FEATURES` order), as the
+    manifest's ``correction.coverage`` records them (read by :mod:`edge.runtime.coverage`)."""
+    reference, rate = features[:, 0], features[:, 1]
+    return {
+        "reference_mm": [float(reference.min()), float(reference.max())],
+        "reference_rate_mm_s": [float(rate.min()), float(rate.max())],
+    }
 
 
 def correction_features(bundle_dir: str | Path, record: Measurement) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -246,12 +267,14 @@ def train_correction_into(
     target = np.concatenate([p[1] for p in pairs])
     model, curve, tail_rmse, n_train = train_correction(features, target, seed=seed, epochs=epochs, quiet=quiet)
     fit_seconds = time.perf_counter() - start
+    coverage = coverage_of(features)
     with tempfile.TemporaryDirectory() as scratch:
         path = model.to_onnx(Path(scratch) / "correction.onnx")
         spec: dict[str, object] = {
             "features": list(FEATURES),
             "input": "features",
             "output": "correction_bar",
+            "coverage": coverage,
             "training": {
                 "method": "direct inverse learning, L-BFGS (host/train/correction.py)",
                 "records": [Path(r.source).name for r in records],
@@ -261,7 +284,7 @@ def train_correction_into(
         }
         add_correction(bundle_dir, path, spec)
     ff_only = float(np.sqrt(np.mean(target[n_train:] ** 2)))
-    return CorrectionResult(FEATURES, fit_seconds, tail_rmse, ff_only, int(target.size), curve)
+    return CorrectionResult(FEATURES, fit_seconds, tail_rmse, ff_only, int(target.size), curve, coverage)
 
 
 WORKING_RANGE_BAR = (0.1, 5.9)
