@@ -128,7 +128,7 @@ def record(
     every, rate = sample_every(config, sample_hz)
     spec = config.rig
     unit = "deg" if spec.is_joint else "bar"
-    protocol = build_protocol(protocol_spec, low, high, config.period_s, duration_s, unit)
+    protocol = build_protocol(protocol_spec, low, high, config.period_s, duration_s, unit, nyquist_hz=rate / 2)
     c = config.control
     limits = Limits(c.pressure_min_bar, c.pressure_max_bar, c.slew_bar_per_s)
     controller = OpenLoopJoint(protocol, config.joint, limits) if spec.is_joint else OpenLoop(protocol, limits)

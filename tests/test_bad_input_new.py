@@ -1,0 +1,76 @@
+"""Bad input to this session's new commands (edge record, edge probe): one line, exit 2, nothing
+of the user's touched, and no huge allocation or endless wait before the refusal."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from edge.control.protocols import build_protocol
+from host.cli import main
+from tests.edge_helpers import HIL_RIG
+
+
+def one_line_error(capsys: pytest.CaptureFixture[str]) -> str:
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert len(err) == 1, err
+    assert "Traceback" not in err[0]
+    return err[0]
+
+
+@pytest.mark.parametrize(
+    ("protocol", "extra", "message"),
+    [
+        ("triangles:frequency=1e-9", [], "one pass lasts 4e+09 s"),  # was a MemoryError "use fewer --operators"
+        ("forc:curves=1e7", [], "one pass lasts"),
+        ("steps", ["--duration", "1e12"], "--duration 1e+12: longer than"),
+        ("sines:frequencies=400", [], "Nyquist rate 50 Hz"),  # was recorded, aliased, at 100 Hz
+        ("chirp:f1=1e5", ["--duration", "1"], "Nyquist rate 50 Hz"),
+        ("multisine:fmax=1e6,period=1000", [], "Nyquist rate"),  # was a hang
+        ("multisine:fmax=20,period=1000", [], "fmax x period is too large"),
+    ],
+)
+def test_oversized_or_aliased_protocol_is_refused_before_allocating(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], protocol: str, extra: list[str], message: str
+) -> None:
+    out = tmp_path / "run.csv"
+    args = ["edge", "record", "--config", str(HIL_RIG), "--protocol", protocol, "--out", str(out), *extra]
+    assert main(args) == 2
+    assert message in one_line_error(capsys)
+    assert not out.exists()
+
+
+def test_protocol_csv_with_time_not_in_seconds_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    own = tmp_path / "own.csv"
+    own.write_text("t,pressure\n0,0\n1e9,1\n")
+    out = tmp_path / "run.csv"
+    assert main(["edge", "record", "--config", str(HIL_RIG), "--protocol", str(own), "--out", str(out)]) == 2
+    assert "is t in seconds?" in one_line_error(capsys)
+    assert not out.exists()
+
+
+def test_faster_sample_rate_allows_faster_sines() -> None:
+    """The Nyquist check follows the recording's rate, not a constant."""
+    with pytest.raises(ValueError, match="Nyquist"):
+        build_protocol("sines:frequencies=10", 0.0, 4.0, 0.001, nyquist_hz=5.0)
+    assert build_protocol("sines:frequencies=10", 0.0, 4.0, 0.001, nyquist_hz=50.0).values.max() > 3.9
+
+
+def test_multisine_one_harmonic_at_a_time_matches_the_outer_product() -> None:
+    import numpy as np
+
+    values = build_protocol("multisine:period=2,fmax=5,periods=1", 0.0, 1.0, 0.01).values
+    t = np.arange(200) * 0.01
+    harmonics = np.arange(1, 11)
+    phases = np.random.default_rng(0).uniform(0.0, 2 * np.pi, harmonics.size)
+    signal = np.sin(2 * np.pi * np.outer(t, harmonics) / 2.0 + phases).sum(axis=1)
+    expected = (signal - signal.min()) / (signal.max() - signal.min())
+    assert values[-200:] == pytest.approx(expected, abs=1e-9)
+
+
+@pytest.mark.parametrize("rate", ["1e-9", "0.5"])
+def test_probe_rate_too_slow_to_stop_is_refused(capsys: pytest.CaptureFixture[str], rate: str) -> None:
+    """--rate 1e-9 slept for 30 years and ignored SIGTERM."""
+    assert main(["edge", "probe", "--config", str(HIL_RIG), "--rate", rate, "--duration", "0.1"]) == 2
+    assert "must be at least 1 Hz" in one_line_error(capsys)
