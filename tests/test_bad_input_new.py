@@ -74,3 +74,50 @@ def test_probe_rate_too_slow_to_stop_is_refused(capsys: pytest.CaptureFixture[st
     """--rate 1e-9 slept for 30 years and ignored SIGTERM."""
     assert main(["edge", "probe", "--config", str(HIL_RIG), "--rate", rate, "--duration", "0.1"]) == 2
     assert "must be at least 1 Hz" in one_line_error(capsys)
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (bytes(range(256)) * 10, "cannot read file"),  # was "internal error UnicodeDecodeError ... a pmactl bug"
+        (b"t,u\n0,1\n1,2\n2,1\n3,2\n", "looks like sample numbers or milliseconds"),  # was simulated as seconds
+        (b"t,u\n0,1\n0.01,1e308\n0.02,1\n", "beyond +-1e+100"),  # was accepted
+        (b"t,u\n0,1\n0.02,2\n0.01,1\n", "not strictly increasing at file line 4"),
+    ],
+)
+def test_simulate_bad_input_is_one_line_before_the_bundle_is_read(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], content: bytes, message: str
+) -> None:
+    data, out = tmp_path / "input.csv", tmp_path / "pred.csv"
+    data.write_bytes(content)
+    assert main(["simulate", str(tmp_path), str(data), "--out", str(out)]) == 2
+    assert message in one_line_error(capsys)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "content",
+    [b"t;u\n0;1\n0.01;2\n0.02;1.5\n", b"t;u\n0;1\n0,01;2\n0,02;1,5\n", b"t\tu\n0\t1\n0.01\t2\n0.02\t1.5\n"],
+)
+def test_simulate_reads_a_designed_input_as_labs_write_it(tmp_path: Path, content: bytes) -> None:
+    """A t,u input with ';', tab or a decimal comma (was: "columns 't' and 'u' needed; found ['t;u']")."""
+    import argparse
+
+    from host.cli.simulate import read_input
+
+    data = tmp_path / "input.csv"
+    data.write_bytes(content)
+    t, u, y = read_input(data, argparse.Namespace(columns=None, time_unit=None))
+    assert t == pytest.approx([0.0, 0.01, 0.02]) and u == pytest.approx([1.0, 2.0, 1.5]) and y is None
+
+
+def test_simulate_keeps_a_designed_inputs_rows_as_spaced(tmp_path: Path) -> None:
+    """Breakpoints of a designed input are its samples: no resampling, no 'two recordings' gap."""
+    import argparse
+
+    from host.cli.simulate import read_input
+
+    data = tmp_path / "input.csv"
+    data.write_text("t,u\n0,0\n0.1,0\n0.101,2\n0.2,2\n0.3,1\n")
+    t, u, y = read_input(data, argparse.Namespace(columns=None, time_unit=None))
+    assert t == pytest.approx([0.0, 0.1, 0.101, 0.2, 0.3]) and u == pytest.approx([0, 0, 2, 2, 1]) and y is None
