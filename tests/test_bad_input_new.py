@@ -121,3 +121,14 @@ def test_simulate_keeps_a_designed_inputs_rows_as_spaced(tmp_path: Path) -> None
     data.write_text("t,u\n0,0\n0.1,0\n0.101,2\n0.2,2\n0.3,1\n")
     t, u, y = read_input(data, argparse.Namespace(columns=None, time_unit=None))
     assert t == pytest.approx([0.0, 0.1, 0.101, 0.2, 0.3]) and u == pytest.approx([0, 0, 2, 2, 1]) and y is None
+
+
+def test_record_shorter_than_the_host_tools_read_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """--duration 0.0001 wrote a one-row CSV that pmactl fit then refused."""
+    out = tmp_path / "run.csv"
+    args = ["edge", "record", "--config", str(HIL_RIG), "--protocol", "steps", "--out", str(out)]
+    assert main([*args, "--duration", "0.0001"]) == 2
+    assert "fewer than 10 rows at 100 Hz" in one_line_error(capsys)
+    assert not out.exists()
+    assert main([*args, "--duration", "0.1", "--json"]) == 0  # exactly 10 rows is enough
+    assert len(out.read_text().splitlines()) == 11
