@@ -232,7 +232,7 @@ def new_command_cases(root: Path, csv: dict[str, str], readonly: Path) -> list[C
             "simulate --columns garbage",
             [*simulate, csv["good"], "--out", str(root / "s9.csv"), "--columns", "garbage"],
         ),
-        Case("simulate ';' decimal-comma input", [*simulate, design_semi, "--out", str(root / "s10.csv")]),
+        Case("simulate ';' decimal-comma input", [*simulate, design_semi, "--out", str(root / "s10.csv")], "ok"),
         Case("fit --columns no such", [*FIT, csv["good"], "--columns", "t=t,u=u,y=nope"]),
         Case("fit --columns twice", [*FIT, csv["good"], "--columns", "t=t,u=u,y=y,y=u"]),
         Case("fit --time-unit h", [*FIT, csv["good"], "--time-unit", "h"]),
