@@ -208,6 +208,7 @@ def load_measurement(
     min_samples: int = 10,
     max_gap_periods: float = MAX_GAP_PERIODS,
     options: ReadOptions | None = None,
+    require_output: bool = True,
 ) -> Measurement:
     """Load and validate a measured-data CSV (see module docstring).
 
@@ -219,13 +220,17 @@ def load_measurement(
         max_gap_periods: a time step longer than this many median steps is a split record
             (two recordings in one file), refused with its position.
         options: the file's layout as the user gave it (column names, time unit, units).
+        require_output: False reads a designed input too (``t, u`` alone): without a ``y``
+            column the measurement's ``y`` is all NaN and its rows are kept as they are spaced
+            (no resampling, no gap check: ``pmactl simulate``'s designed inputs).
     """
     path = Path(path)
     options = options or ReadOptions()
     layout = sniff_layout(path)
     _check_duplicates(path, layout.header)
     columns = _roles(path, layout.header, options.columns)
-    missing = [c for c in REQUIRED if c not in columns]
+    required = REQUIRED if require_output or "y" in columns else ("t", "u")
+    missing = [c for c in required if c not in columns]
     if missing:
         raise DataError(
             f"{path}: column(s) {', '.join(repr(m) for m in missing)} missing; found {layout.header}. "
@@ -243,11 +248,12 @@ def load_measurement(
         c for c in columns if c not in REQUIRED + OPTIONAL and c
     ]
     data = {c: table[:, columns.index(c)] for c in wanted}
-    core = np.column_stack([data[c] for c in REQUIRED])
+    core = np.column_stack([data[c] for c in required])
     bad = np.flatnonzero(~np.all(np.isfinite(core), axis=1))
     if bad.size:
         raise DataError(
-            f"{path}: {bad.size} row(s) with NaN, inf or non-numbers in t/u/y (file lines {_line_list(lines, bad)}); "
+            f"{path}: {bad.size} row(s) with NaN, inf or non-numbers in {'/'.join(required)} "
+            f"(file lines {_line_list(lines, bad)}); "
             "remove or interpolate them"
         )
     for name in (c for c in OPTIONAL if c in data):
@@ -280,13 +286,15 @@ def load_measurement(
         check_seconds(median, bool(np.all(t == np.round(t))), str(path), time_name)
     units["t"] = "s"
     gap = int(np.argmax(steps))
-    if steps[gap] > max_gap_periods * median:
+    if "y" in columns and steps[gap] > max_gap_periods * median:
         raise DataError(
             f"{path}: t jumps by {steps[gap]:.4g} s ({steps[gap] / median:.3g} sample periods of {median:.4g} s) "
             f"between file lines {lines[gap]} and {lines[gap + 1]} (t={t[gap]:g} -> {t[gap + 1]:g}): "
             "two recordings in one file; split it there and use each part on its own"
         )
     extras = {c: data[c] for c in wanted if c not in REQUIRED}
+    if "y" not in columns:  # a designed input: its rows are the samples, as the user spaced them
+        return Measurement(t, data["u"], np.full_like(t, np.nan), extras, str(path), [], units)
     measurement = Measurement(t, data["u"], data["y"], extras, str(path), [], units)
     return _uniform(measurement, irregular, tolerance)
 

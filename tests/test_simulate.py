@@ -83,7 +83,7 @@ def test_a_designed_input_without_y_is_simulated(bundle, tmp_path, capsys):
 @pytest.mark.parametrize(
     "case, message",
     [
-        ("no_u", "columns 't' and 'u' needed"),
+        ("no_u", r"column\(s\) 'u' missing"),
         ("estimate_without_y", "--initial estimate needs a measured y column"),
         ("not_a_model", "neither a bundle .* nor a trained model"),
         ("out_exists", "already exists"),

@@ -36,6 +36,9 @@ import numpy as np
 from edge.errors import DataError
 
 LEAD_IN_S = 2.0  # the ramp from the range's low end to a protocol's first value [s]
+# the longest command table (lead-in + passes) held in memory: 2.2 h at 1 kHz, 64 MB of float64
+MAX_TABLE_SAMPLES = 8_000_000
+MAX_MULTISINE_WORK = 200_000_000  # samples x harmonics of one multisine period (about 2 s of CPU)
 
 Shape = Callable[[float, dict[str, list[float]]], np.ndarray]  # (dt_s, params) -> samples in 0..1
 
@@ -81,7 +84,9 @@ def _multisine(dt: float, p: dict[str, list[float]]) -> np.ndarray:
     harmonics = np.arange(1, max(1, int(fmax * period)) + 1)
     phases = np.random.default_rng(int(p["seed"][0])).uniform(0.0, 2 * np.pi, harmonics.size)
     t = np.arange(int(round(period / dt))) * dt
-    signal = np.sin(2 * np.pi * np.outer(t, harmonics) / period + phases).sum(axis=1)
+    signal = np.zeros_like(t)
+    for harmonic, phase in zip(harmonics, phases):  # one harmonic at a time: memory of one period
+        signal += np.sin(2 * np.pi * harmonic * t / period + phase)
     one = (signal - signal.min()) / (signal.max() - signal.min())
     return np.tile(one, int(p["periods"][0]))
 
@@ -100,25 +105,57 @@ class ProtocolKind:
     defaults: dict[str, list[float]]
     positive: tuple[str, ...]  # parameters that must be > 0
     integers: tuple[str, ...] = ()
+    length_s: Callable[[dict[str, list[float]]], float] = lambda p: 0.0  # one pass [s], known before the shape
+    frequencies: tuple[str, ...] = ()  # parameters in Hz that must stay below the recording's Nyquist rate
 
 
 PROTOCOLS: dict[str, ProtocolKind] = {
-    "triangles": ProtocolKind(_triangles, {"levels": [4], "frequency": [0.05]}, ("levels", "frequency"), ("levels",)),
-    "forc": ProtocolKind(_forc, {"curves": [10], "rate": [0.1]}, ("curves", "rate"), ("curves",)),
+    "triangles": ProtocolKind(
+        _triangles,
+        {"levels": [4], "frequency": [0.05]},
+        ("levels", "frequency"),
+        ("levels",),
+        lambda p: p["levels"][0] / p["frequency"][0],
+        ("frequency",),
+    ),
+    "forc": ProtocolKind(
+        _forc,
+        {"curves": [10], "rate": [0.1]},
+        ("curves", "rate"),
+        ("curves",),
+        lambda p: (p["curves"][0] + 1) / p["rate"][0],
+    ),
     "sines": ProtocolKind(
         _sines,
         {"frequencies": [0.1, 0.2, 0.5, 1.0, 2.0], "amplitudes": [1.0, 0.5], "cycles": [3]},
         ("frequencies", "amplitudes", "cycles"),
         ("cycles",),
+        lambda p: len(p["amplitudes"]) * p["cycles"][0] * sum(1.0 / f for f in p["frequencies"]),
+        ("frequencies",),
     ),
-    "steps": ProtocolKind(_steps, {"levels": [5], "hold": [10.0]}, ("levels", "hold"), ("levels",)),
+    "steps": ProtocolKind(
+        _steps,
+        {"levels": [5], "hold": [10.0]},
+        ("levels", "hold"),
+        ("levels",),
+        lambda p: (2 * p["levels"][0] + 1) * p["hold"][0],
+    ),
     "multisine": ProtocolKind(
         _multisine,
         {"period": [20.0], "fmax": [2.0], "periods": [3], "seed": [0]},
         ("period", "fmax", "periods"),
         ("periods", "seed"),
+        lambda p: p["period"][0] * p["periods"][0],
+        ("fmax",),
     ),
-    "chirp": ProtocolKind(_chirp, {"f0": [0.05], "f1": [2.0], "length": [60.0]}, ("f0", "f1", "length")),
+    "chirp": ProtocolKind(
+        _chirp,
+        {"f0": [0.05], "f1": [2.0], "length": [60.0]},
+        ("f0", "f1", "length"),
+        (),
+        lambda p: p["length"][0],
+        ("f1",),
+    ),
 }
 
 
@@ -176,6 +213,25 @@ def _parameters(name: str, text: str, spec: str) -> dict[str, list[float]]:
     return values
 
 
+def _check_size(spec: str, kind: ProtocolKind, p: dict[str, list[float]], dt: float, nyquist_hz: float | None) -> None:
+    """Refuse, before anything is allocated, a pass longer than a table holds, a frequency the
+    recording cannot see (aliased) and a multisine too costly to compute."""
+    for key in kind.frequencies:
+        if nyquist_hz is not None and max(p[key]) >= nyquist_hz:
+            raise DataError(
+                f"--protocol {spec!r}: {key}={max(p[key]):g} Hz is at or above the recording's Nyquist rate "
+                f"{nyquist_hz:g} Hz (half of --sample-hz); lower it or raise --sample-hz"
+            )
+    length = kind.length_s(p)
+    if length / dt > MAX_TABLE_SAMPLES:
+        raise DataError(
+            f"--protocol {spec!r}: one pass lasts {length:.4g} s, longer than the {MAX_TABLE_SAMPLES * dt:.0f} s "
+            "a recording holds at this loop rate; shorten it (and repeat it with --duration)"
+        )
+    if "fmax" in p and (p["fmax"][0] * p["period"][0]) * (p["period"][0] / dt) > MAX_MULTISINE_WORK:
+        raise DataError(f"--protocol {spec!r}: fmax x period is too large to compute; lower fmax or period")
+
+
 def _from_csv(path: Path, spec: str, dt: float) -> np.ndarray:
     try:
         with path.open(newline="", encoding="utf-8-sig") as handle:
@@ -205,14 +261,31 @@ def _from_csv(path: Path, spec: str, dt: float) -> np.ndarray:
         raise DataError(f"--protocol {path}: needs at least two rows below the header")
     if times[0] != 0.0:
         raise DataError(f"--protocol {path}: t must start at 0 (it starts at {times[0]:g} s)")
+    if times[-1] / dt > MAX_TABLE_SAMPLES:
+        raise DataError(
+            f"--protocol {path}: lasts {times[-1]:.4g} s, longer than the {MAX_TABLE_SAMPLES * dt:.0f} s a recording "
+            "holds at this loop rate; is t in seconds? (shorten the file or split it)"
+        )
     return np.asarray(np.interp(np.arange(int(round(times[-1] / dt)) + 1) * dt, times, values), dtype=np.float64)
 
 
 def build_protocol(
-    spec: str, low: float, high: float, dt_s: float, duration_s: float | None = None, unit: str = "bar"
+    spec: str,
+    low: float,
+    high: float,
+    dt_s: float,
+    duration_s: float | None = None,
+    unit: str = "bar",
+    nyquist_hz: float | None = None,
 ) -> Protocol:
     """The command table of ``spec`` (a name, ``name:key=value,...`` or a CSV path) on
-    ``low..high`` [``unit``], sampled every ``dt_s`` [s], repeated to ``duration_s`` [s]."""
+    ``low..high`` [``unit``], sampled every ``dt_s`` [s], repeated to ``duration_s`` [s]; a
+    named protocol's frequencies must stay below ``nyquist_hz`` (the recording's, when given)."""
+    if duration_s is not None and duration_s / dt_s > MAX_TABLE_SAMPLES:
+        raise DataError(
+            f"--duration {duration_s:g}: longer than the {MAX_TABLE_SAMPLES * dt_s:.0f} s one recording holds at "
+            "this loop rate; record several shorter runs (pmactl fit and diagnose take several)"
+        )
     name, _, text = spec.partition(":")
     if spec.lower().endswith(".csv"):
         values = _from_csv(Path(spec), spec, dt_s)
@@ -222,7 +295,9 @@ def build_protocol(
                 f"{low:g}..{high:g} {unit} (--range and the config's limits); rescale the file or widen --range"
             )
     elif name in PROTOCOLS:
-        shape = PROTOCOLS[name].shape(dt_s, _parameters(name, text, spec))
+        parameters = _parameters(name, text, spec)
+        _check_size(spec, PROTOCOLS[name], parameters, dt_s, nyquist_hz if nyquist_hz is not None else 0.5 / dt_s)
+        shape = PROTOCOLS[name].shape(dt_s, parameters)
         if shape.size == 0:
             raise DataError(f"--protocol {spec!r}: shorter than one tick; lengthen it")
         values = low + (high - low) * shape

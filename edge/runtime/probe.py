@@ -32,6 +32,7 @@ from edge.runtime.scheduler import TickScheduler
 
 SPIN_S = 300e-6
 MIN_SPAN_SIGMAS = 20.0  # the two calibration points must differ by this many noise sigmas
+MIN_RATE_HZ = 1.0  # slowest --rate: a read (and a look at the stop request) at least once a second
 
 
 @dataclass
@@ -66,9 +67,10 @@ class Probe:
     def __init__(self, config: RigConfig, rate_hz: float | None = None) -> None:
         rate = config.loop.rate_hz if rate_hz is None else rate_hz
         fastest = fastest_period_s(config)
-        if not (math.isfinite(rate) and 0 < rate <= 1.0 / fastest + 1e-9):
+        if not (math.isfinite(rate) and MIN_RATE_HZ <= rate <= 1.0 / fastest + 1e-9):
             raise DataError(
-                f"--rate {rate:g} must be > 0 and at most {1.0 / fastest:.0f} Hz (what this rig's wires allow)"
+                f"--rate {rate:g} must be at least {MIN_RATE_HZ:g} Hz (slower would not see Ctrl-C or the wires move) "
+                f"and at most {1.0 / fastest:.0f} Hz (what this rig's wires allow)"
             )
         self.config, self.rate_hz, self.period_s = config, rate, 1.0 / rate
         self.layout = frame_layout(config.rig)

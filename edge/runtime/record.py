@@ -31,6 +31,7 @@ from edge.runtime.summary import RunSummary
 DEFAULT_RANGE_BAR = (0.0, 4.0)  # Ai2019's triangles reach 1, 2, 3, 4 bar
 DEFAULT_RANGE_DEG = (-30.0, 30.0)  # a joint's commanded angle (hil joint_record: +-30 deg)
 DEFAULT_SAMPLE_HZ = 100.0  # the rate of the recordings the host tools were developed on
+MIN_ROWS = 10  # host.data.load_measurement's min_samples: a shorter recording is refused by every host tool
 
 
 @dataclass
@@ -126,9 +127,14 @@ def record(
         raise DataError(f"--duration {duration_s:g} must be a finite number of seconds > 0")
     low, high = parse_range(range_text, config)
     every, rate = sample_every(config, sample_hz)
+    if duration_s is not None and duration_s * rate < MIN_ROWS:
+        raise DataError(
+            f"--duration {duration_s:g} s gives fewer than {MIN_ROWS} rows at {rate:g} Hz, fewer than the host tools "
+            f"read; record at least {MIN_ROWS / rate:g} s"
+        )
     spec = config.rig
     unit = "deg" if spec.is_joint else "bar"
-    protocol = build_protocol(protocol_spec, low, high, config.period_s, duration_s, unit)
+    protocol = build_protocol(protocol_spec, low, high, config.period_s, duration_s, unit, nyquist_hz=rate / 2)
     c = config.control
     limits = Limits(c.pressure_min_bar, c.pressure_max_bar, c.slew_bar_per_s)
     controller = OpenLoopJoint(protocol, config.joint, limits) if spec.is_joint else OpenLoop(protocol, limits)

@@ -10,7 +10,6 @@ whose output fits the record's calibration window best, as ``pmactl fit --test``
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import tempfile
 from pathlib import Path
@@ -20,7 +19,7 @@ from numpy.typing import NDArray
 
 from edge.errors import DataError
 from host.cli.lazy import lazy
-from host.cli.options import add_data_options, read_measurement
+from host.cli.options import add_data_options
 from host.cli.outputs import OutputPathError, check_output
 
 CALIBRATION_FRACTION = 0.1  # share of the record after the input moves, as pmactl fit --test
@@ -48,35 +47,15 @@ def read_input(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64] | None]:
     """``t, u`` and ``y`` (``None`` when the file has no y column) of a CSV; one clear error otherwise.
 
-    A recording (a y column, or ``--columns``) is read as every measurement is
-    (:func:`host.cli.options.read_measurement`: delimiter, decimal comma, time unit); a designed
-    input is a plain ``t,u`` CSV."""
-    if getattr(args, "columns", None):
-        m = read_measurement(str(path), args)
-        return m.t, m.u, m.y
-    with path.open(newline="", encoding="utf-8-sig") as handle:
-        header = next(csv.reader(handle), [])
-    columns = [c.strip() for c in header]
-    if "y" in columns:
-        m = read_measurement(str(path), args)
-        return m.t, m.u, m.y
-    if "t" not in columns or "u" not in columns:
-        raise DataError(
-            f"{path}: columns 't' and 'u' needed; found {columns}. Name them t [s] and u (input), or map them "
-            "with --columns t=NAME,u=NAME,y=NAME"
-        )
-    with path.open(newline="", encoding="utf-8-sig") as handle:
-        rows = list(csv.reader(handle))[1:]
-    it, iu = columns.index("t"), columns.index("u")
-    t, u = np.empty(len(rows)), np.empty(len(rows))
-    for line, row in enumerate(rows, start=2):
-        try:
-            t[line - 2], u[line - 2] = float(row[it]), float(row[iu])
-        except (ValueError, IndexError):
-            raise DataError(f"{path}: line {line}: t and u must be numbers; fix or remove the line") from None
-    if t.size < 2 or not np.all(np.isfinite(t)) or not np.all(np.isfinite(u)) or np.any(np.diff(t) <= 0):
-        raise DataError(f"{path}: need at least 2 rows of finite t, u with t increasing; check the file")
-    return t, u, None
+    A recording and a designed input (``t, u`` alone: its rows are kept as spaced) are read as every
+    measurement is (:func:`host.data.load_measurement`: delimiter, decimal comma, ``--columns``,
+    ``--time-unit``, a time column that looks like milliseconds, values beyond 1e100)."""
+    from host.cli.options import read_options
+    from host.data import load_measurement
+
+    m = load_measurement(path, options=read_options(args), min_samples=2, require_output=False)
+    has_output = not np.all(np.isnan(m.y))  # a y column with a NaN is refused by the loader
+    return m.t, m.u, (m.y if has_output else None)
 
 
 def run(args: argparse.Namespace) -> int:
