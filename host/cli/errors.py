@@ -53,7 +53,10 @@ def describe(exc: BaseException) -> str:
     elif isinstance(exc, OSError):
         text = _os_error(exc)
     elif isinstance(exc, MemoryError):
-        text = "out of memory; use fewer --operators or a shorter record (or run it on a machine with more memory)"
+        text = (
+            "out of memory; make the job smaller (a shorter record or protocol, fewer --operators) "
+            "or run it on a machine with more memory"
+        )
     else:
         detail = str(exc) or "no message"
         text = (

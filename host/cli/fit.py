@@ -111,6 +111,10 @@ def run(args: argparse.Namespace) -> int:
         preisach_method=args.preisach_method,
     )
     args.test = expand_runs(args.test, "--test")
+    trains = expand_runs([args.train], "--train")
+    if len(trains) > 1:
+        raise DataError(f"--train {args.train} matches {len(trains)} files; fit on one recording (name it)")
+    args.train = trains[0]
     with Steps(3 + len(args.test) + bool(args.save), wanted(args.json), f"pmactl fit {args.model}") as steps:
         steps.start(f"reading {Path(args.train).name}")
         train = read_measurement(args.train, args)
