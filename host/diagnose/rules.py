@@ -91,8 +91,8 @@ class Rules:
     # the within-state permutation null beside the block bootstrap (it ignores serial dependence)
     within_state_null: bool = True
     # composite structural null (A8, host/diagnose/composite.py): simulated records per effect-free
-    # class (3 classes), p resolution 1/(draws+1); 0: off. Off by default: measured on the tuning
-    # subset it named fewer effects (1/13 vs 3/13) for one false alarm fewer (1/6 vs 2/6)
+    # class (3 classes), p resolution 1/(draws+1); 0: off. Off by default: on the tuning subset
+    # (every 3rd case, 60 s) it named 2/13 vs 3/13 for one false alarm fewer (1/6 vs 2/6)
     composite_draws: int = 0
     # surrogate copies of each measured column: p resolution 1/200
     column_surrogates: int = 199
