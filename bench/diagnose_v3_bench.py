@@ -1,13 +1,14 @@
 """Benchmark of diagnosis v3: wall time, CPU time and peak memory for one long record and for
 many short runs.
 
-Usage: python bench/diagnose_v3_bench.py [--busy]
+Usage: python bench/diagnose_v3_bench.py [--busy] [--composite-draws N]
 
 Rows: the HIL's mixed protocol at 100 Hz with creep hidden, 10 000 and 40 000 samples in one
 file; and 40 runs of 200 samples (a 8 000-sample recording cut into 40 files, each restarting
 ``t`` at 0). Each row runs ``diagnose_runs`` in a fresh process (default threading) and reports
 wall time, the process's CPU time (user + system) and its peak resident memory. ``--busy``: another
 CPU-bound process (numpy matrix products) runs throughout, as on a shared 2-core machine.
+``--composite-draws N``: with the composite structural null on (N simulated records per class).
 Targets (issue 33): 40 000 samples in <= 15 s and <= 1 GB; 40 runs of 200 samples in <= 10 s.
 """
 
@@ -28,11 +29,13 @@ CHILD = """
 import json, resource, sys, time, warnings
 warnings.simplefilter("ignore")
 from host.data import load_measurement
+from dataclasses import replace
+from host.diagnose.rules import RULES
 from host.diagnose.v3 import diagnose_runs
 start = time.perf_counter()
-runs = [load_measurement(p) for p in sys.argv[1:]]
+runs = [load_measurement(p) for p in sys.argv[2:]]
 loaded = time.perf_counter() - start
-result = diagnose_runs(runs)
+result = diagnose_runs(runs, rules=replace(RULES, composite_draws=int(sys.argv[1])))
 usage = resource.getrusage(resource.RUSAGE_SELF)
 print(json.dumps({"seconds": time.perf_counter() - start, "load_s": loaded, "cpu_s": usage.ru_utime + usage.ru_stime,
                   "cause": result.cause, "peak_mb": usage.ru_maxrss / 1024}))
@@ -72,7 +75,8 @@ def short_runs(count: int, length: int, tmp: Path) -> list[Path]:
 def main(argv: list[str]) -> int:
     env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
     busy = subprocess.Popen([sys.executable, "-c", BUSY], env=env) if "--busy" in argv else None
-    print(f"another CPU-bound process running: {'yes' if busy else 'no'}; cores: {os.cpu_count()}")
+    draws = argv[argv.index("--composite-draws") + 1] if "--composite-draws" in argv else "0"
+    print(f"another CPU-bound process: {'yes' if busy else 'no'}; cores: {os.cpu_count()}; composite draws: {draws}")
     print(f"{'data':>22} {'wall s':>7} {'CPU s':>7} {'load s':>7} {'peak MB':>8} {'cause':>16}")
     try:
         with tempfile.TemporaryDirectory() as tmp_name:
@@ -81,7 +85,11 @@ def main(argv: list[str]) -> int:
             rows.append(("40 runs x 200 samples", short_runs(40, 200, tmp)))
             for label, paths in rows:
                 out = subprocess.run(
-                    [sys.executable, "-c", CHILD, *map(str, paths)], capture_output=True, text=True, check=True, env=env
+                    [sys.executable, "-c", CHILD, draws, *map(str, paths)],
+                    capture_output=True,
+                    text=True,
+                    check=True,
+                    env=env,
                 )
                 row = json.loads(out.stdout.strip().splitlines()[-1])
                 print(

@@ -155,3 +155,33 @@ def test_a_real_muscle_campaign_of_short_runs_is_diagnosed_run_by_run(tmp_path):
     assert len(payload["runs"]) >= 30 and "whole runs" in payload["holdout"]
     assert payload["cause"] in {*CAUSES, "none"}
     assert all(0.0 < p <= 1.0 for p in payload["p_values"].values())
+
+
+def _tuning_record(name: str) -> Measurement:
+    from tests.plants.families import FAMILIES
+
+    cases_of, record = FAMILIES["tuning"]
+    case = next(c for c in cases_of(60.0) if c.name == name)
+    return record(case)[0]
+
+
+COMPOSITE = dataclasses.replace(RULES, composite_draws=99)
+
+
+def test_the_composite_null_keeps_an_effect_free_bouc_wen_record_at_none():
+    m = _tuning_record("bouc_wen/none:none/multisine@50Hz/s100")
+    plain = diagnose_runs([m])
+    # the Preisach baseline's structural error on a Bouc-Wen plant passes the noise-only nulls ...
+    assert plain.tests["rate_dependence"].unique_p <= plain.tests["rate_dependence"].level
+    d = diagnose_runs([m], rules=COMPOSITE)
+    # ... but not the simulated effect-free classes fitted to the same record
+    assert d.cause == "none", d.reason
+    for g, t in d.tests.items():
+        if CAUSES[g].kind != "column":
+            assert t.unique_p > t.level and "least favourable" in t.null, (g, t.unique_p, t.null)
+
+
+def test_a_hidden_rate_effect_still_passes_its_unique_test_under_the_composite_null():
+    m = _tuning_record("generalised_play/rate_dependence:weight/steps@200Hz/s105")
+    t = diagnose_runs([m], rules=COMPOSITE).tests["rate_dependence"]
+    assert t.unique_p <= t.level, t.null

@@ -139,9 +139,13 @@ def group_tests(
     rules: Rules,
     surrogate_group: Callable[[str, NDArray[np.float64]], Matrix],
     rng: np.random.Generator,
+    null_records: dict[str, Matrix] | None = None,
 ) -> dict[str, GroupTest]:
     """Every group's marginal and unique tests (see module docstring). ``surrogate_group(cause,
-    column_copy)`` builds a column cause's regressors from a surrogate copy of its column."""
+    column_copy)`` builds a column cause's regressors from a surrogate copy of its column.
+    ``null_records`` (class name -> n x draws simulated outputs, :mod:`host.diagnose.composite`)
+    adds the composite structural null: a dynamic group's p is then at least its max-T p against
+    the least favourable class."""
     names = list(groups)
     partialled = {g: w.prepare(groups[g]) for g in names}
     e = w.residual[:, None]
@@ -160,11 +164,19 @@ def group_tests(
     level_dynamic = rules.alpha * len(dynamic) / len(names)
     level_column = rules.alpha / len(names)
     p_u, p_m = _max_t(w, dynamic, marginal, unique, t_m, t_u, rules, rng)
-    nulls = {
-        g: f"max-T over {len(dynamic)} groups: block bootstrap and within-state permutations "
-        f"({rules.bootstrap_draws} each)"
-        for g in dynamic
-    }
+    kinds = "block bootstrap" + (" and within-state permutations" if rules.within_state_null else "")
+    nulls = {g: f"max-T over {len(dynamic)} groups: {kinds} ({rules.bootstrap_draws} each)" for g in dynamic}
+    if null_records:
+        n_sims = next(iter(null_records.values())).shape[1]
+        for name, sims in null_records.items():
+            c_u, c_m = _composite(w, sims, dynamic, marginal, unique, q_all, dof, t_m, t_u)
+            for g in dynamic:
+                if c_u[g] > p_u[g]:
+                    nulls[g] = (
+                        f"max-T over {len(dynamic)} groups against {n_sims} simulated effect-free "
+                        f"records per class ({', '.join(null_records)}; least favourable: {name})"
+                    )
+                p_u[g], p_m[g] = max(p_u[g], c_u[g]), max(p_m[g], c_m[g])
     for g in columns:
         raw = float(chi2.sf(t_u[g], max(unique[g].shape[1], 1)))
         p_u[g], p_m[g] = (raw, float(chi2.sf(t_m[g], max(marginal[g].shape[1], 1))))
@@ -212,12 +224,45 @@ def _max_t(
     boot = _adjusted(
         lambda count: e[stationary_draws(n, length, count, rng)], dynamic, marginal, unique, t_m, t_u, rules
     )
+    if not rules.within_state_null:
+        return boot
     perm = _adjusted(
         lambda count: e[within_strata_permutations(strata, count, rng).T], dynamic, marginal, unique, t_m, t_u, rules
     )
     return (
         {g: max(boot[0][g], perm[0][g]) for g in dynamic},
         {g: max(boot[1][g], perm[1][g]) for g in dynamic},
+    )
+
+
+def _composite(
+    w: Whitened,
+    sims: Matrix,
+    dynamic: list[str],
+    marginal: dict[str, Matrix],
+    unique: dict[str, Matrix],
+    q_all: Matrix,
+    dof: int,
+    t_m: dict[str, float],
+    t_u: dict[str, float],
+) -> tuple[dict[str, float], dict[str, float]]:
+    """Max-T adjusted p-values of the observed statistics against simulated records of one
+    effect-free class, each scored with the observed record's design (whitener, nuisance, bases:
+    fixed by the input), its own variance estimated after every group as for the observed one."""
+    if not dynamic:
+        return {}, {}
+    e = partial_out(w.q_nuisance, whiten(w.rs, sims, w.ar)[w.keep])
+    sigma2 = (np.sum(e**2, axis=0) - np.sum((q_all.T @ e) ** 2, axis=0)) / dof
+    max_u = np.max([_z(_stat(unique[g], e, sigma2), unique[g].shape[1]) for g in dynamic], axis=0)
+    max_m = np.max([_z(_stat(marginal[g], e, sigma2), marginal[g].shape[1]) for g in dynamic], axis=0)
+    count = e.shape[1]
+
+    def adjusted(maxima: NDArray[np.float64], stat: float, df: int) -> float:
+        return float((1 + np.sum(maxima >= _z(stat, df))) / (count + 1))
+
+    return (
+        {g: adjusted(max_u, t_u[g], unique[g].shape[1]) for g in dynamic},
+        {g: adjusted(max_m, t_m[g], marginal[g].shape[1]) for g in dynamic},
     )
 
 

@@ -88,6 +88,12 @@ class Rules:
     # direction of the last move x quantile bins of where the input last turned
     strata_input_bins: int = 12
     strata_turn_bins: int = 4
+    # the within-state permutation null beside the block bootstrap (it ignores serial dependence)
+    within_state_null: bool = True
+    # composite structural null (A8, host/diagnose/composite.py): simulated records per effect-free
+    # class (3 classes), p resolution 1/(draws+1); 0: off. Off by default: on the tuning subset
+    # (every 3rd case, 60 s) it named 2/13 vs 3/13 for one false alarm fewer (1/6 vs 2/6)
+    composite_draws: int = 0
     # surrogate copies of each measured column: p resolution 1/200
     column_surrogates: int = 199
     # a column whose chi-square p exceeds this cannot pass its surrogate test: the surrogates are skipped
@@ -119,6 +125,8 @@ class Rules:
     # held-out folds: blocks in time (long records) or runs (short runs)
     max_folds: int = 5
     min_fold_samples: int = 100
+    # the held-out confirmation also needs the gain's 90 % interval above 0 (beside Clark-West p <= alpha)
+    heldout_interval_gate: bool = True
     # a cause whose unique test passes on the full record but fails with the richer baseline is the
     # baseline's class, not a cause, when its statistic falls by more than this share
     ladder_drop: float = 0.5

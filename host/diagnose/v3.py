@@ -20,13 +20,14 @@ from __future__ import annotations
 
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
 from host.data import Measurement
+from host.diagnose.composite import null_classes, simulated_records, unrestricted_residual
 from host.diagnose.conditional import GroupTest, group_tests, whitened
 from host.diagnose.groups import branch_of, cause_groups, column_group
 from host.diagnose.heldout import HeldOut, held_out, holdout_folds
@@ -56,6 +57,7 @@ class DiagnosisV3:
     rejected: list[str] = field(default_factory=list)  # passed on the record, failed the ladder or held out
     seconds: float = 0.0
     cpu_seconds: float = 0.0
+    trials: dict[str, HeldOut] = field(default_factory=dict)  # every held-out comparison made, in order
 
     @property
     def gain(self) -> float:
@@ -111,7 +113,15 @@ def score(
     def surrogate(cause: str, copy: NDArray[np.float64]) -> NDArray[np.float64]:
         return column_group(rs, base, copy, rules, branch)
 
-    tests = group_tests(w, groups, rules, surrogate, np.random.default_rng(seed))
+    rng = np.random.default_rng(seed)
+    sims = None
+    if rules.composite_draws > 0 and any(CAUSES[g].kind != "column" for g in groups):
+        noise = unrestricted_residual(rs, base, groups)
+        sims = {
+            c.name: simulated_records(rs, c.fit, noise, rules.composite_draws, rules, rng)
+            for c in null_classes(rs, base, rules)
+        }
+    tests = group_tests(w, groups, rules, surrogate, rng, sims)
     return base, groups, tests, notes
 
 
@@ -144,11 +154,12 @@ def diagnose_runs(
         cause, class_mismatch, not_confirmed = "none", False, False
         result_heldout: HeldOut | None = None
         rejected: list[str] = []
+        trials: dict[str, HeldOut] = {}
         for candidate in ranked:  # the largest unique share first; the first confirmed is named
             if CAUSES[candidate].kind == "dynamic":
                 if richer is None:
                     _say(progress, "diagnose v3: checking the dynamic causes against a richer baseline ...")
-                    richer = score(rs, rules.richer_levels, rules, seed + 1)[2]
+                    richer = score(rs, rules.richer_levels, replace(rules, composite_draws=0), seed + 1)[2]
                 r = richer[candidate]
                 if r.unique_p > r.level and r.unique_stat < (1 - rules.ladder_drop) * tests[candidate].unique_stat:
                     class_mismatch = class_mismatch or not rejected
@@ -166,8 +177,9 @@ def diagnose_runs(
                 np.random.default_rng(seed),
                 rs.columns.get(column) if column else None,
             )
+            trials[candidate] = trial
             # nested confirmation: the extension must predict rows it was not fitted on
-            if trial.clark_west_p <= rules.alpha and trial.interval[0] > 0.0:
+            if trial.clark_west_p <= rules.alpha and (trial.interval[0] > 0.0 or not rules.heldout_interval_gate):
                 cause, result_heldout, class_mismatch, not_confirmed = candidate, trial, False, False
                 break
             if not rejected:
@@ -191,6 +203,7 @@ def diagnose_runs(
         rs.notes + notes,
         not_confirmed=not_confirmed and cause == "none",
         rejected=rejected,
+        trials=trials,
     )
     out.reason = explain(out, first)
     out.seconds, out.cpu_seconds = time.perf_counter() - wall, time.process_time() - cpu
