@@ -29,12 +29,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import importlib  # noqa: E402
 
+from bench.plants.families import FAMILIES, family_names  # noqa: E402
 from host.data import Measurement  # noqa: E402
 from host.diagnose.conditional import block_length, orthonormal, stationary_draws, whitened  # noqa: E402
 from host.diagnose.rules import RULES  # noqa: E402
 from host.diagnose.runs import run_set  # noqa: E402
 from host.diagnose.v3 import diagnose_runs, score  # noqa: E402
-from tests.plants.families import FAMILIES, family_names  # noqa: E402
 
 
 def oracle_p(m: Measurement, waveform: np.ndarray, tests: int) -> float:

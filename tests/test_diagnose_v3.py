@@ -158,7 +158,7 @@ def test_a_real_muscle_campaign_of_short_runs_is_diagnosed_run_by_run(tmp_path):
 
 
 def _tuning_record(name: str) -> Measurement:
-    from tests.plants.families import FAMILIES
+    from bench.plants.families import FAMILIES
 
     cases_of, record = FAMILIES["tuning"]
     case = next(c for c in cases_of(60.0) if c.name == name)

@@ -19,7 +19,7 @@ from host.diagnose.runs import RunSet
 def _scaled(v: NDArray[np.float64]) -> NDArray[np.float64]:
     centred = v - v.mean(axis=0)
     spread = np.std(centred, axis=0)
-    return centred / np.where(spread > 0, spread, 1.0)
+    return np.asarray(centred / np.where(spread > 0, spread, 1.0), dtype=np.float64)
 
 
 def branch_of(rs: RunSet, share: float = 0.1) -> NDArray[np.float64]:

@@ -8,6 +8,7 @@ constant within each run and different between runs is a column like any other.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -46,7 +47,9 @@ class RunSet:
         stops = np.r_[edges, self.run.size]
         return [(int(a), int(b)) for a, b in zip(starts, stops)]
 
-    def per_run(self, fn, values: NDArray[np.float64]) -> NDArray[np.float64]:  # noqa: ANN001 - any filter
+    def per_run(
+        self, fn: Callable[[NDArray[np.float64]], NDArray[np.float64]], values: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
         """``fn`` applied to each run's slice of ``values`` (memory restarts at each run)."""
         out = np.empty_like(values, dtype=np.float64)
         for a, b in self.bounds():
@@ -60,7 +63,7 @@ def _decimate(m: Measurement, q: int) -> Measurement:
     n = len(m) // q * q
 
     def mean(v: NDArray[np.float64]) -> NDArray[np.float64]:
-        return v[:n].reshape(-1, q).mean(axis=1)
+        return np.asarray(v[:n].reshape(-1, q).mean(axis=1), dtype=np.float64)
 
     return Measurement(m.t[:n:q].copy(), mean(m.u), mean(m.y), {k: mean(v) for k, v in m.extras.items()}, m.source)
 
