@@ -236,7 +236,10 @@ def run_demo(args: argparse.Namespace) -> int:
     say(f"Feedforward cuts the RMS error by {1 - ff_rms / pid_rms:.0%} (Ai2019 reports 48 %); with the trained")
     say(f"correction the RMS error is {nn_rms / pid_rms:.2f}x PID alone. Tracking: {tracking}")
     say("")
-    say(f"The antagonistic joint of Schreiber ({HIL_JOINT_CONFIG.name}: two muscles on a pulley, 500 Hz, lockstep),")
+    say(
+        f"The antagonistic joint of Schreiber et al. ({HIL_JOINT_CONFIG.name}: two muscles on a pulley, 500 Hz, "
+        "lockstep),"
+    )
     say(f"tracking 15 sin(2 pi 0.2 t) deg for {JOINT_S:g} s, scored after {SETTLE_S:g} s:")
     joint = joint_loop(out, say)
     joint_cut = 1 - float(joint[1]["rms_error"]) / float(joint[0]["rms_error"])  # type: ignore[arg-type]
