@@ -10,6 +10,9 @@ A bundle directory keeps complete releases and points ``current`` at one
                      inverse.npz     lookup table of its inverse (desired y -> input u)
                      golden.npz      inputs and outputs of both tables (and the correction)
                      correction.onnx optional neural correction (``add_correction``)
+                     forward_net.onnx, inverse_net.onnx, operator.npz
+                                     optional LSTM-NARMAX step graphs (``pmactl train --save``)
+                                     and the forward net's operator table (:class:`NetPart`)
                      signature.json  optional Ed25519 signature (``pmactl bundle sign``)
 
 Every write makes a new release beside the old ones and flips ``current`` by rename, so a
@@ -25,7 +28,8 @@ import json
 import math
 import platform
 import shutil
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 from edge import __version__
@@ -34,9 +38,30 @@ from edge.hysteresis.base import HysteresisModel
 from edge.hysteresis.lut import CompiledModel, read_table, write_table
 from edge.runtime.bundle import CURRENT, FORMAT, FORMAT_VERSION, MANIFEST, RELEASES, load_bundle, sha256_file
 from models_export import store
-from models_export.golden import GOLDEN_FILE, correction_vectors, table_vectors, write_golden
+from models_export.golden import GOLDEN_FILE, correction_vectors, net_vectors, table_vectors, write_golden
 
 CORRECTION_FILE = "correction.onnx"
+OPERATOR_FILE = "operator.npz"
+
+
+@dataclass
+class NetPart:
+    """A net a bundle holds: its exported step graph and the manifest description.
+
+    ``which``: ``forward`` (pressure -> contraction) or ``inverse`` (target -> command);
+    ``spec``: inputs, output, state, ``step_s`` [s] (the sample period it was trained at),
+    ``u_range`` and ``n_range`` (training ranges of its inputs), training record;
+    ``operator``: the forward net's operator model, in its rest state, and ``warp``
+    (centre, half range) of its input.
+    """
+
+    which: str
+    onnx_path: Path
+    spec: dict[str, object]
+    operator: HysteresisModel | None = None
+    warp: tuple[float, float] = (0.0, 0.0)
+
+
 PROTECTED_FIELDS = ("format", "format_version", "files", "model", "created_utc")
 sha256_of = sha256_file  # the name callers used before
 
@@ -101,8 +126,11 @@ def write_bundle(
     training_data: Iterable[str | Path] = (),
     provenance: Mapping[str, object] | None = None,
     keep: int = store.DEFAULT_KEEP,
+    nets: Sequence[NetPart] = (),
 ) -> Path:
     """Write ``forward`` and ``inverse`` (in their current states) as a new release at ``directory``.
+
+    ``nets``: LSTM-NARMAX step graphs to hold as well (``pmactl train --save``).
 
     ``training_data``: files the model was fitted on (their SHA-256 goes into the provenance);
     ``provenance``: extra provenance fields; ``keep``: releases kept (current and previous always).
@@ -115,6 +143,7 @@ def write_bundle(
         for role, model in (("forward", forward), ("inverse", inverse)):
             path = write_table(model.compile(), staging / f"{role}.npz")
             files[path.name] = {"role": role, "kind": model.kind, "sha256": sha256_file(path)}
+        net_entries = _write_nets(staging, nets, files)
         return {
             "format": FORMAT,
             "format_version": FORMAT_VERSION,
@@ -129,9 +158,30 @@ def write_bundle(
             "files": files,
             "fit": fit_record or {},
             "provenance": {**provenance_record(training_data), **(provenance or {})},
+            **({"nets": net_entries} if net_entries else {}),
         }
 
     return _new_release(target, build, keep)
+
+
+def _write_nets(staging: Path, nets: Sequence[NetPart], files: dict[str, object]) -> dict[str, object]:
+    """Copy each net's graph (and the forward net's operator table) into ``staging``; their entries."""
+    entries: dict[str, object] = {}
+    for part in nets:
+        if part.which not in ("forward", "inverse") or part.which in entries:
+            raise BundleError(f"net {part.which!r}: a bundle holds one forward and one inverse net")
+        name = f"{part.which}_net.onnx"
+        shutil.copyfile(part.onnx_path, staging / name)
+        files[name] = {"role": f"{part.which}_net", "kind": "onnx", "sha256": sha256_file(staging / name)}
+        spec: dict[str, object] = {"file": name, **part.spec}
+        if part.which == "forward":
+            if part.operator is None:
+                raise BundleError("the forward net needs its operator model (NetPart.operator)")
+            path = write_table(part.operator.compile(), staging / OPERATOR_FILE)
+            files[OPERATOR_FILE] = {"role": "operator", "kind": part.operator.kind, "sha256": sha256_file(path)}
+            spec["operator"] = {"file": OPERATOR_FILE, "warp_centre": part.warp[0], "warp_half_range": part.warp[1]}
+        entries[part.which] = spec
+    return entries
 
 
 def add_correction(directory: str | Path, model_path: str | Path, spec: dict[str, object]) -> Path:
@@ -244,11 +294,30 @@ def _add_golden(staging: Path, manifest: dict[str, object]) -> None:
         spec = manifest["correction"]
         assert isinstance(spec, dict)
         vectors.update(correction_vectors(staging / by_role["correction"], spec, inverse))
+    nets = manifest.get("nets")
+    if isinstance(nets, dict) and nets:
+        inverse.reset()
+        vectors.update(net_vectors(staging, nets, inverse))
+    manifest["roles"] = roles_of(manifest)
     path = write_golden(staging / GOLDEN_FILE, vectors)
     files[GOLDEN_FILE] = {"role": "golden", "kind": "npz", "sha256": sha256_file(path)}
 
 
+def roles_of(manifest: Mapping[str, object]) -> dict[str, list[str]]:
+    """The roles a release's parts can fill, as the manifest records them (``roles``)."""
+    from edge.control.net_roles import feedforward_roles
+
+    nets = manifest.get("nets")
+    nets = nets if isinstance(nets, dict) else {}
+    return {
+        "feedforward": feedforward_roles("inverse" in nets, "correction" in manifest),
+        "forward": ["table", *(["net"] if "forward" in nets else [])],
+    }
+
+
 __all__ = [
+    "NetPart",
+    "roles_of",
     "CURRENT",
     "add_correction",
     "check_save_target",

@@ -87,6 +87,32 @@ def correction_vectors(
     return {"correction_features": features, "correction_output": output}
 
 
+def net_vectors(
+    release: Path, nets: Mapping[str, Mapping[str, object]], inverse: CompiledModel, seed: int = 2
+) -> dict[str, NDArray[np.float64]]:
+    """Inputs and outputs of each net (``forward``: pressure -> contraction, ``inverse``: target
+    -> command), run by the edge's own evaluators one net step per input from reset."""
+    from edge.control.net_roles import net_forward, net_inverse
+
+    rng = np.random.default_rng(seed)
+    vectors: dict[str, NDArray[np.float64]] = {}
+    for which, spec in sorted(nets.items()):
+        path = release / str(spec["file"])
+        step_s = float(spec["step_s"])  # type: ignore[arg-type]
+        if which == "inverse":
+            model = net_inverse(path, spec, inverse, step_s)
+            lo, hi = finite_range(inverse, inverse)
+        else:
+            model = net_forward(path, spec, release, step_s)  # type: ignore[assignment]
+            lo, hi = (float(v) for v in spec["u_range"])  # type: ignore[attr-defined]
+        u = _walk(rng, TABLE_SAMPLES, lo, hi)
+        model.reset()
+        vectors[f"{which}_net_input"] = u
+        vectors[f"{which}_net_output"] = model.simulate(u)
+        model.reset()
+    return vectors
+
+
 def write_golden(path: Path, vectors: Mapping[str, NDArray[np.float64]]) -> Path:
     """Write the vectors as an ``.npz`` (loaded without pickle)."""
     with path.open("wb") as handle:

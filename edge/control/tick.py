@@ -56,6 +56,16 @@ class ScratchFrame:
         self.estop, self.valve_enable, self.state, self.fault = 0.0, 0.0, 0, 0
 
 
+class InverseModel(Protocol):
+    """A feedforward inverse: the lookup table (``CompiledModel``) or the net (``NetInverse``)."""
+
+    input_range: tuple[float, float]
+
+    def reset(self) -> None: ...
+
+    def step(self, target: float) -> float: ...
+
+
 class Correction(Protocol):
     """A learned feedforward correction (``edge.control.neural.NeuralCorrection``)."""
 
@@ -90,7 +100,7 @@ class Controller:
         self,
         reference: Callable[[float], float],
         gains: PIDGains,
-        inverse: CompiledModel | None = None,
+        inverse: CompiledModel | InverseModel | None = None,
         limits: Limits | None = None,
         correction: Correction | None = None,
     ) -> None:

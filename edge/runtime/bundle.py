@@ -19,14 +19,18 @@ import os
 import stat
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from edge import __version__
 from edge.errors import BundleError
 from edge.hysteresis.lut import CompiledModel, LookupTable, read_table
+
+if TYPE_CHECKING:
+    from edge.control.net_narmax import NetForward, NetInverse
 
 FORMAT = "pmactl-bundle"
 FORMAT_VERSION = 2
@@ -36,7 +40,9 @@ LOAD_ATTEMPTS = 20  # a release pruned while it is read: follow `current` again,
 SIGNATURE = "signature.json"
 CURRENT = "current"
 RELEASES = "releases"
-ROLES = ("forward", "inverse", "correction", "golden")
+ROLES = ("forward", "inverse", "correction", "golden", "forward_net", "inverse_net", "operator")
+NET_ROLES = {"forward": "forward_net", "inverse": "inverse_net"}  # manifest "nets" key -> file role
+NET_GOLDEN_RTOL = 1e-4  # float32 nets: the fused and onnxruntime evaluators round differently
 RANGE_TOLERANCE = 1e-6  # share of a range's span; the tables are compiled from one model
 GOLDEN_RTOL = 1e-9  # tables are float64 and deterministic: a replay reproduces to rounding
 
@@ -57,6 +63,7 @@ class Bundle:
     correction_path: Path | None = None
     manifest_sha256: str = ""
     signer: str | None = None
+    net_paths: dict[str, Path] = field(default_factory=dict)  # "forward" / "inverse" -> the ONNX step graph
 
     @property
     def release_id(self) -> str:
@@ -88,6 +95,38 @@ class Bundle:
     def correction_spec(self) -> dict[str, object] | None:
         spec = self.manifest.get("correction")
         return dict(spec) if isinstance(spec, dict) else None
+
+    def net_spec(self, which: str) -> dict[str, object]:
+        """The manifest's description of the ``forward`` or ``inverse`` net (empty when absent)."""
+        nets = self.manifest.get("nets")
+        spec = nets.get(which) if isinstance(nets, dict) else None
+        return dict(spec) if isinstance(spec, dict) else {}
+
+    @property
+    def feedforward_roles(self) -> list[str]:
+        """The feedforward roles this bundle can fill (``edge.control.net_roles``)."""
+        from edge.control.net_roles import feedforward_roles
+
+        return feedforward_roles("inverse" in self.net_paths, self.correction_path is not None)
+
+    def feedforward(self, role: str, period_s: float) -> CompiledModel | NetInverse:
+        """The feedforward inverse of ``role`` (``table`` or ``net``, a correction is separate) at
+        loop period ``period_s`` [s]; a fresh net evaluator each call, the table is shared."""
+        if not role.startswith("net"):
+            return self.inverse
+        from edge.control.net_roles import net_inverse
+
+        if "inverse" not in self.net_paths:
+            raise BundleError(f"{self.path}: holds no inverse net; train one with pmactl train --model lstm-narmax")
+        return net_inverse(self.net_paths["inverse"], self.net_spec("inverse"), self.inverse, period_s)
+
+    def forward_net(self, period_s: float) -> NetForward:
+        """The forward net (pressure [bar] -> contraction [mm]) at loop period ``period_s`` [s]."""
+        from edge.control.net_roles import net_forward
+
+        if "forward" not in self.net_paths:
+            raise BundleError(f"{self.path}: holds no forward net; train one with pmactl train --model lstm-narmax")
+        return net_forward(self.net_paths["forward"], self.net_spec("forward"), self.path, period_s)
 
     def require_units(self, input_unit: str, output_unit: str) -> None:
         """Refuse a bundle fitted in other units than the runtime's (a silent 10x error otherwise)."""
@@ -197,11 +236,61 @@ def _load(release: Path, trusted: Sequence[tuple[str, bytes]] | None) -> Bundle:
         raise BundleError(f"{manifest_path}: correction entry and correction file do not go together; re-export")
     forward, inverse = CompiledModel(tables["forward"]), CompiledModel(tables["inverse"])
     check_roles(manifest_path, manifest, forward, inverse)
+    net_paths = _net_paths(manifest_path, manifest, paths)
     if "golden" in paths:
         replay_table_golden(paths["golden"], forward, inverse)
     elif manifest["format_version"] != 1:
         raise BundleError(f"{manifest_path}: no golden vectors listed; re-export the bundle with pmactl fit --save")
-    return Bundle(release, manifest, forward, inverse, correction_path, manifest_sha256, signer)
+    bundle = Bundle(release, manifest, forward, inverse, correction_path, manifest_sha256, signer, net_paths)
+    if net_paths:
+        if "golden" not in paths:
+            raise BundleError(f"{manifest_path}: nets without golden vectors; re-export the bundle")
+        replay_net_golden(paths["golden"], bundle)
+    return bundle
+
+
+def _net_paths(manifest_path: Path, manifest: dict[str, object], paths: dict[str, Path]) -> dict[str, Path]:
+    """The nets' files by manifest key; a ``nets`` entry and its files must go together."""
+    nets = manifest.get("nets", {})
+    if not isinstance(nets, dict) or set(nets) - set(NET_ROLES):
+        raise BundleError(f"{manifest_path}: 'nets' must map forward/inverse to net entries; re-export the bundle")
+    found = {}
+    for which, role in NET_ROLES.items():
+        entry = nets.get(which)
+        if (entry is not None) != (role in paths):
+            raise BundleError(f"{manifest_path}: the {which} net entry and its file do not go together; re-export")
+        if entry is not None:
+            if not isinstance(entry, dict) or entry.get("file") != paths[role].name:
+                raise BundleError(f"{manifest_path}: the {which} net entry names another file; re-export the bundle")
+            found[which] = paths[role]
+    if ("forward" in found) != ("operator" in paths):
+        raise BundleError(f"{manifest_path}: a forward net needs its operator table and back; re-export the bundle")
+    return found
+
+
+def replay_net_golden(path: Path, bundle: Bundle) -> None:
+    """Replay the nets' recorded inputs through fresh edge evaluators (one net step per input)."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            vectors = {k: np.asarray(data[k], dtype=float) for k in data.files}
+    except (OSError, ValueError) as exc:
+        raise BundleError(f"{path}: golden vectors unreadable ({exc}); re-export the bundle") from exc
+    for which in bundle.net_paths:
+        try:
+            u, expected = vectors[f"{which}_net_input"], vectors[f"{which}_net_output"]
+        except KeyError as exc:
+            raise BundleError(f"{path}: no golden vectors for the {which} net; re-export the bundle") from exc
+        step_s = float(bundle.net_spec(which).get("step_s", 0.0))  # type: ignore[arg-type]
+        model = bundle.feedforward("net", step_s) if which == "inverse" else bundle.forward_net(step_s)
+        model.reset()
+        got = model.simulate(u)
+        model.reset()
+        mismatch = golden_mismatch(got, expected, NET_GOLDEN_RTOL)
+        if mismatch:
+            raise BundleError(
+                f"{path.parent}: the {which} net does not reproduce its golden vectors ({mismatch}): "
+                "it was changed after export; re-export the bundle"
+            )
 
 
 def _read_plain(release: Path, name: str) -> bytes:

@@ -84,6 +84,13 @@ class BundleSection:
 
 
 @dataclass(frozen=True)
+class FeedforwardSection:
+    """Which feedforward role runs (``edge.control.net_roles``); empty: the bundle's default."""
+
+    role: str = ""
+
+
+@dataclass(frozen=True)
 class RigConfig:
     """A validated rig configuration (see the module docstring)."""
 
@@ -93,6 +100,7 @@ class RigConfig:
     safety: SafetyLimits = field(default_factory=SafetyLimits)
     telemetry: TelemetrySection = field(default_factory=TelemetrySection)
     joint: JointSection = field(default_factory=JointSection)
+    feedforward: FeedforwardSection = field(default_factory=FeedforwardSection)
     bundle_trusted_keys: tuple[Path, ...] = ()
     source: str = "<config>"
 
@@ -112,6 +120,7 @@ SECTIONS: dict[str, type] = {
     "telemetry": TelemetrySection,
     "joint": JointSection,
     "bundle": BundleSection,
+    "feedforward": FeedforwardSection,
 }
 RIG_SECTIONS = ("buses", "devices", "channels")
 

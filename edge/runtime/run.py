@@ -18,6 +18,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -39,6 +40,10 @@ from edge.runtime.scheduler import RealtimeSettings, TickScheduler, apply_realti
 from edge.runtime.summary import ErrorStats, RunSummary
 from edge.runtime.telemetry import TelemetryWriter
 from edge.runtime.watchdog import Watchdog
+
+if TYPE_CHECKING:
+    from edge.control.net_narmax import NetInverse
+    from edge.hysteresis.lut import CompiledModel
 
 SPIN_S = 300e-6  # poll the clock for the last 300 us before a deadline (wall clock only)
 PHASES = ("read", "control", "write", "log", "cpu")  # wall ns per phase; "cpu": thread CPU ns of control + log
@@ -120,12 +125,19 @@ class EdgeRuntime:
         if bundle is not None:  # a joint's model maps desired to commanded angle (edge.control.joint)
             bundle.require_units("deg" if spec.is_joint else "bar", self.unit)
         correction = None
-        if use_correction and bundle is not None and bundle.correction_path is not None and not spec.is_joint:
+        self.feedforward_role = ""
+        if bundle is not None and not spec.is_joint:
+            from edge.control.net_roles import choose_role
+
+            self.feedforward_role = choose_role(bundle.feedforward_roles, config.feedforward.role, config.source)
+        if use_correction and self.feedforward_role.endswith("+correction") and bundle is not None:
             from edge.control.neural import NeuralCorrection
 
-            correction = NeuralCorrection(bundle.correction_path, bundle.correction_spec or {})
+            correction = NeuralCorrection(bundle.correction_path or "", bundle.correction_spec or {})
         c = config.control
-        inverse = bundle.inverse if feedforward and bundle is not None else None
+        inverse: CompiledModel | NetInverse | None = bundle.inverse if feedforward and bundle is not None else None
+        if feedforward and bundle is not None and self.feedforward_role.startswith("net"):
+            inverse = bundle.feedforward(self.feedforward_role, config.period_s)
         limits = Limits(c.pressure_min_bar, c.pressure_max_bar, c.slew_bar_per_s)
         self.controller: Controller | JointController
         if controller is not None:
@@ -133,7 +145,8 @@ class EdgeRuntime:
         elif spec.is_joint:
             j = config.joint
             gains = PIDGains(j.kp, j.ki_per_s, j.kd_s, j.derivative_filter_s)
-            self.controller = JointController(reference, gains, j, inverse, limits, j.feedback == "through_model")
+            table = bundle.inverse if feedforward and bundle is not None else None  # a joint runs the table
+            self.controller = JointController(reference, gains, j, table, limits, j.feedback == "through_model")
         else:
             gains = PIDGains(c.kp_bar_per_mm, c.ki_bar_per_mm_s, c.kd_bar_s_per_mm, c.derivative_filter_s)
             self.controller = Controller(reference, gains, inverse, limits, correction)
@@ -189,6 +202,7 @@ class EdgeRuntime:
             "bundle": bundle_record(self.bundle),
             "reference": self.reference.spec,
             "feedforward": self.controller.inverse is not None,
+            "feedforward_role": self.feedforward_role if self.controller.inverse is not None else "",
             "correction": self.controller.correction is not None,
             "states": [s.value for s in State],
             "faults": {f.value: f.name.lower() for f in Fault},
@@ -294,6 +308,7 @@ class EdgeRuntime:
         return {
             "bus_errors": self._device_error_ticks,
             "feedforward": self.controller.inverse is not None,
+            "feedforward_role": self.feedforward_role if self.controller.inverse is not None else "",
             "correction": self.controller.correction is not None,
             "reference": self.reference.spec,
             "rate_hz": self.config.loop.rate_hz,

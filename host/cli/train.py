@@ -5,12 +5,18 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from edge.errors import DataError
 from host.cli.bundle import add_key_option, report_signing, signing_state
 from host.cli.lazy import lazy
 from host.cli.options import add_data_options, expand_runs, read_measurement, read_options
 from host.cli.outputs import OutputPathError, check_output, strict_json
+
+if TYPE_CHECKING:
+    from host.data import Measurement
+    from host.train import Trained
+    from host.train.net_bundle import NetBundle
 
 DEFAULT_EPOCHS = {"hammerstein": 60, "lstm-narmax": 150, "correction": 300}
 
@@ -44,8 +50,13 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
     )
     train.add_argument("--bundle", metavar="DIR", help="correction only: the bundle whose feedforward it corrects")
     train.add_argument("--json", action="store_true", help="print one JSON object (no progress bar)")
-    train.add_argument("--save", metavar="DIR", help="write step.onnx, model.json, operator.npz, training_curve.png")
-    add_key_option(train, "of --bundle that holds the correction (--model correction)")
+    train.add_argument(
+        "--save",
+        metavar="DIR",
+        help="lstm-narmax: write a bundle store (tables, forward and inverse nets; new release in an existing "
+        "store); hammerstein: a model folder (step.onnx, model.json, operator.npz); correction: the training curve",
+    )
+    add_key_option(train, "(of --save for lstm-narmax, of --bundle for --model correction)")
     add_data_options(train)
     train.set_defaults(run=lazy("host.cli.train"))
 
@@ -57,16 +68,18 @@ def run(args: argparse.Namespace) -> int:
         raise DataError(f"--epochs {args.epochs} must be at least 1")
     if args.epochs is None:
         args.epochs = DEFAULT_EPOCHS[args.model]
-    if args.save:
+    if args.model == "lstm-narmax":
+        signed_before = _check_store(args.save, args.key) if args.save else None
+    elif args.save:
         _check_save(args.save)  # before training: a bad path costs nothing and nothing is half-written
     if args.model == "correction":
         return _run_correction(args)
     if args.bundle:
         raise DataError("--bundle applies to --model correction only; use --save DIR for a trained model")
-    if args.key:
+    if args.key and not (args.model == "lstm-narmax" and args.save):
         raise DataError(
-            f"--key signs a bundle's new release, and --model {args.model} writes none (--save writes a model "
-            "folder: step.onnx, model.json); drop --key"
+            f"--key signs a bundle's new release, and --model {args.model} writes none here (lstm-narmax with "
+            "--save writes one); drop --key"
         )
     if not 0 < args.calibration < 0.9:
         raise DataError(f"--calibration {args.calibration} must be between 0 and 0.9")
@@ -92,6 +105,7 @@ def run(args: argparse.Namespace) -> int:
         }
         for r in results
     ]
+    written = None
     if args.save:
         record = {
             "model": args.model,
@@ -101,10 +115,18 @@ def run(args: argparse.Namespace) -> int:
             "fit_seconds": trained.fit_seconds,
             "tests": tests_json,
         }
-        save_model(trained, args.save, record)
+        if args.model == "lstm-narmax":
+            written = _save_bundle(args, trained, records, record)
+        else:
+            save_model(trained, args.save, record)
     if args.json:
         # the documented keys only (tests/test_train.py); warnings went to stderr
-        print(strict_json({"model": args.model, "fit_seconds": trained.fit_seconds, "tests": tests_json}))
+        out: dict[str, object] = {"model": args.model, "fit_seconds": trained.fit_seconds, "tests": tests_json}
+        if written is not None:
+            out["bundle"] = written.as_dict()
+        print(strict_json(out))
+        if written is not None:
+            report_signing(args.save, args.key, signed_before, json_output=True)
         return 0
     print(
         f"{args.model}: trained on {', '.join(Path(p).name for p in args.train)} ({trained.samples} samples; memory "
@@ -124,11 +146,45 @@ def run(args: argparse.Namespace) -> int:
             )
     else:
         print("no --test given: pass held-out recordings with --test to score the model")
-    if args.save:
+    if written is not None:
+        inv = written.inverse
+        print(
+            f"bundle written to {args.save}: {written.table_model} tables, forward and inverse LSTM-NARMAX; inverse "
+            f"net held-out command RMSE {inv.tail_rmse_bar:.4f} bar (table alone {inv.tail_rmse_table_bar:.4f} bar)"
+        )
+        report_signing(args.save, args.key, signed_before, json_output=False)
+    elif args.save:
         print(
             f"model written to {args.save} (step.onnx, model.json, operator.npz, training_curve.png)", file=sys.stdout
         )
     return 0
+
+
+def _check_store(path: str, key: str | None) -> str | None:
+    """Refuse a --save target that cannot hold a bundle store, or a bad --key, before training;
+    returns the key id that signed the store's current release (``None``: unsigned or new)."""
+    from models_export.bundle import check_save_target
+    from models_export.store import is_store
+
+    check_output(path, "--save", kind="dir")
+    check_save_target(path)
+    if Path(path).is_dir() and is_store(Path(path)):
+        return signing_state(path, key)
+    if key is not None:
+        from models_export.signing import read_private_key
+
+        read_private_key(Path(key))  # a new store has no signer: only the key is checked
+    return None
+
+
+def _save_bundle(
+    args: argparse.Namespace, trained: Trained, records: list[Measurement], record: dict[str, object]
+) -> NetBundle:
+    from host.cli.fit import bundle_units
+    from host.train.net_bundle import save_net_bundle
+
+    units = bundle_units(records[0])
+    return save_net_bundle(trained, records, args.save, units, record, epochs=args.epochs, quiet=args.json)
 
 
 def _check_save(path: str) -> None:

@@ -193,15 +193,42 @@ def train_lstm_narmax(
     settings: TrainerSettings = SETTINGS,
 ) -> tuple[LSTMNarmax, Split]:
     """Identify the operator, train the LSTM (see module docstring). ``split_fn(start) -> Split``."""
-    import torch
-    from torch import nn
-
     # the operator is identified on the whole record, as ``pmactl fit`` would (the baselines it is
     # compared with see the same data); the tail is held out from the net's training only
     operator = identify_tanh_pi(u, y)
     split = split_fn(operator.start_index)
     n_all = operator.operator.simulate(u[split.start :], operator.start_branch)
-    data = _prepare(u[split.start :], y[split.start :], n_all, split.tail - split.start)
+    weights, curve = fit_narmax_net(
+        u[split.start :], y[split.start :], n_all, split.tail - split.start,
+        seed=seed, epochs=epochs, quiet=quiet, settings=settings,
+    )  # fmt: skip
+    return LSTMNarmax(operator, weights, curve), split
+
+
+def fit_narmax_net(
+    u: NDArray[np.float64],
+    y: NDArray[np.float64],
+    n: NDArray[np.float64],
+    n_train: int,
+    *,
+    seed: int = 0,
+    epochs: int = 60,
+    quiet: bool = True,
+    settings: TrainerSettings = SETTINGS,
+    label: str = "lstm-narmax",
+) -> tuple[NarmaxWeights, Curve]:
+    """Train the LSTM and head on ``y(k) = n(k) + head(h(k))`` given the operator output ``n``.
+
+    ``u``, ``y``, ``n`` are one record from a known memory state; samples ``[0, n_train)`` train,
+    the rest is the early-stopping tail. The same trainer fits the forward model (``u`` the
+    pressure, ``n`` the tanh-PI operator, ``y`` the contraction) and the inverse of
+    :mod:`host.train.net_inverse` (``u`` the desired contraction, ``n`` the table inverse, ``y``
+    the pressure). Returns the best weights on the tail and the training curve.
+    """
+    import torch
+    from torch import nn
+
+    data = _prepare(u, y, n, n_train)
     mean, std, y_std = data.mean, data.std, data.y_std
 
     lstm = nn.LSTM(N_REGRESSORS, HIDDEN, batch_first=True)
@@ -245,7 +272,7 @@ def train_lstm_narmax(
     teacher_epochs = max(1, int(round(settings.teacher_share * epochs)))
     optimiser = torch.optim.Adam(params, lr=settings.teacher_lr)
     window = settings.teacher_window
-    for epoch in progress(teacher_epochs, "lstm-narmax teacher forcing", quiet):
+    for epoch in progress(teacher_epochs, f"{label} teacher forcing", quiet):
         losses = []
         starts = rng.permutation(_window_starts(data.n_train, window, rng))
         for batch in np.array_split(starts, max(1, len(starts) // settings.teacher_batch)):
@@ -266,7 +293,7 @@ def train_lstm_narmax(
     optimiser = torch.optim.Adam(params, lr=settings.free_run_lr)
     window, washout = settings.free_run_window, settings.washout
     y_col = (float(mean[4]), float(std[4]))
-    for epoch in progress(epochs - teacher_epochs, "lstm-narmax free run", quiet):
+    for epoch in progress(epochs - teacher_epochs, f"{label} free run", quiet):
         losses = []
         for _ in range(settings.free_run_steps):
             starts = _window_starts(data.n_train, window, rng)
@@ -284,7 +311,7 @@ def train_lstm_narmax(
         if stopper.update(score, snapshot()):
             break
     restore_best()
-    return LSTMNarmax(operator, weights(), curve), split
+    return weights(), curve
 
 
 def _free_run(

@@ -1,0 +1,130 @@
+"""``pmactl train --model lstm-narmax --save DIR``: the trained nets as a bundle the edge runs.
+
+The bundle (:mod:`models_export.bundle`) holds, from the same training recording(s):
+
+* the rate-independent table model (``forward.npz`` / ``inverse.npz``), fitted as
+  ``pmactl fit --model TABLE_MODEL`` would: the ``table`` feedforward role and the table forward;
+* the forward LSTM-NARMAX (``forward_net.onnx``, its tanh-PI operator as ``operator.npz``):
+  pressure [bar] -> contraction [mm], the forward model a twin runs;
+* the inverse LSTM-NARMAX (``inverse_net.onnx``) over the table inverse, trained by direct
+  inverse learning (:mod:`host.train.net_inverse`): the ``net`` feedforward role.
+
+Each net is one ONNX step graph with its state as explicit inputs and outputs, golden vectors
+recorded by the edge's own evaluators (replayed on every load).
+"""
+
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from edge.errors import DataError
+from edge.hysteresis.lut import CompiledModel
+from host.data import Measurement
+from host.train import Trained, join
+from host.train.net_inverse import InverseNet, train_inverse_net
+
+TABLE_MODEL = "mpi"  # Ai2019's feedforward model; identified in about a second on 10^4 samples
+SAMPLE_PERIOD_RTOL = 1e-6
+
+
+@dataclass
+class NetBundle:
+    """What was written: the inverse net's held-out numbers and the table model's kind."""
+
+    directory: Path
+    inverse: InverseNet
+    table_model: str
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "bundle": str(self.directory),
+            "table_model": self.table_model,
+            "inverse_tail_rmse_bar": self.inverse.tail_rmse_bar,
+            "inverse_table_only_tail_rmse_bar": self.inverse.tail_rmse_table_bar,
+        }
+
+
+def sample_period(records: list[Measurement]) -> float:
+    """The common sample period [s] of ``records`` (the nets step at it); refuses a mix."""
+    periods = [r.dt for r in records]
+    if any(abs(p - periods[0]) > SAMPLE_PERIOD_RTOL * periods[0] for p in periods):
+        shown = ", ".join(f"{Path(r.source).name} {1 / r.dt:g} Hz" for r in records)
+        raise DataError(f"--train recordings at different rates ({shown}); record them at one --sample-hz")
+    return periods[0]
+
+
+def save_net_bundle(
+    trained: Trained,
+    records: list[Measurement],
+    directory: str | Path,
+    units: tuple[str, str],
+    record_info: dict[str, object],
+    *,
+    epochs: int,
+    quiet: bool = True,
+    table_model: str = TABLE_MODEL,
+) -> NetBundle:
+    """Fit the table, train the inverse net, export both nets and write the bundle at ``directory``."""
+    from host.train.lstm_narmax import LSTMNarmax
+    from host.workflow import make_estimator, rest_state
+    from models_export.bundle import NetPart, write_bundle
+    from models_export.onnx_step import export_step
+
+    model = trained.model
+    if not isinstance(model, LSTMNarmax):
+        raise DataError(f"--save writes a bundle for --model lstm-narmax; {model.kind} is not supported yet")
+    step_s = sample_period(records)
+    joined = join(records)
+    estimator = make_estimator(table_model).fit(joined.u, joined.y)
+    forward_table, inverse_table = rest_state(estimator.model_, float(joined.u.min()))
+    inverse_net = train_inverse_net(
+        joined, CompiledModel(inverse_table.compile()), seed=trained.seed, epochs=epochs, quiet=quiet
+    )
+    operator = model.operator.operator
+    n_forward = operator.simulate(joined.u, "descending")
+    # the operator table is stored at the vented rest state the edge arms in
+    operator.model.reset(float(operator.warp(np.array([joined.u.min()]))[0]), "descending")
+    with tempfile.TemporaryDirectory() as scratch:
+        forward_path, spec = export_step("lstm-narmax", model.weights, Path(scratch) / "forward.onnx")
+        inverse_path, _ = export_step("lstm-narmax", inverse_net.weights, Path(scratch) / "inverse.onnx")
+        forward_spec: dict[str, object] = {
+            **spec.as_dict(),
+            "step_s": step_s,
+            "u_range": [float(joined.u.min()), float(joined.u.max())],
+            "n_range": [float(n_forward.min()), float(n_forward.max())],
+            "maps": f"{units[0]} -> {units[1]}",
+            "training": {"method": "LSTM-NARMAX (Wu2025), host/train/lstm_narmax.py", **record_info},
+        }
+        inverse_spec: dict[str, object] = {
+            **spec.as_dict(),
+            "step_s": step_s,
+            "u_range": list(inverse_net.target_range),
+            "n_range": list(inverse_net.table_range),
+            "maps": f"{units[1]} -> {units[0]}",
+            "training": {
+                "method": "direct inverse learning over the inverse table, host/train/net_inverse.py",
+                "tail_rmse": inverse_net.tail_rmse_bar,
+                "table_only_tail_rmse": inverse_net.tail_rmse_table_bar,
+                "seed": trained.seed,
+            },
+        }
+        parts = [
+            NetPart("forward", forward_path, forward_spec, operator.model, (operator.centre, operator.half_range)),
+            NetPart("inverse", inverse_path, inverse_spec),
+        ]
+        sources = [Path(r.source) for r in records]
+        fit_record = {"model": table_model, "samples": len(joined), "nets": "lstm-narmax", **record_info}
+        write_bundle(
+            directory,
+            forward_table,
+            inverse_table,
+            units=units,
+            fit_record=fit_record,
+            training_data=[p for p in sources if p.is_file()],
+            nets=parts,
+        )
+    return NetBundle(Path(directory), inverse_net, table_model)
