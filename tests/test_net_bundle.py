@@ -1,0 +1,129 @@
+"""The trained nets as a bundle: written by train --save, verified, signed, deployed, run as feedforward.
+
+One short recording made by ``pmactl edge record`` on the emulated rig with rate dependence, a
+net trained for a few epochs (small, not good: these tests check the wiring, the number is in
+bench/net_feedforward_bench.py), everything through the CLI a user types.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from edge.runtime.bundle import MANIFEST, load_bundle
+from host.cli import main
+
+EXAMPLE = Path(__file__).resolve().parent.parent / "docs" / "examples" / "hil-rig.toml"
+SINE = "sine:amplitude=20,frequency=0.5,offset=35"
+
+
+def rig_config(directory: Path, role: str | None) -> Path:
+    text = EXAMPLE.read_text().replace(
+        'url = "sim://rig?clock=lockstep"', 'url = "sim://rig?clock=lockstep&effect=rate_dependence&seed=1"'
+    )
+    if role is not None:
+        text += f'\n[feedforward]\nrole = "{role}"\n'
+    path = directory / f"rig-{role or 'default'}.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    root = tmp_path_factory.mktemp("netbundle")
+    recording = root / "rec.csv"
+    protocol = "sines:frequencies=0.2/0.5/1,amplitudes=1/0.5,cycles=2"
+    assert main(["edge", "record", "--config", str(rig_config(root, None)), "--protocol", protocol,
+                 "--range", "0:6", "--out", str(recording), "--json"]) == 0  # fmt: skip
+    assert main(["keygen", "--out", str(root / "keys")]) == 0
+    store = root / "store"
+    assert main(["train", "--model", "lstm-narmax", "--train", str(recording), "--units", "bar,mm",
+                 "--epochs", "4", "--save", str(store), "--key", str(root / "keys" / "pmactl.key")]) == 0  # fmt: skip
+    return root, recording, store
+
+
+def test_the_bundle_holds_tables_both_nets_and_says_which_roles(trained):
+    _, _, store = trained
+    bundle = load_bundle(store, trusted_keys=[trained[0] / "keys" / "pmactl.pub"])
+    assert set(bundle.net_paths) == {"forward", "inverse"}
+    assert bundle.manifest["roles"] == {"feedforward": ["table", "net"], "forward": ["table", "net"]}
+    assert bundle.signer is not None
+    assert main(["bundle", "verify", str(store)]) == 0
+
+
+def test_the_net_inverse_starts_again_on_reset_and_holds_its_residual_between_net_steps(trained):
+    bundle = load_bundle(trained[2])
+    inverse = bundle.feedforward("net", 1e-3)
+    target = 35.0 + 20.0 * np.sin(2 * np.pi * 0.5 * np.arange(2000) * 1e-3)
+    inverse.reset()
+    first = inverse.simulate(target)
+    inverse.reset()
+    again = inverse.simulate(target)
+    bundle.inverse.reset()
+    table = bundle.inverse.simulate(target)
+    assert np.array_equal(first, again) and np.all(np.isfinite(first))
+    residual = (first - table).reshape(-1, 10)  # the net steps every 10 ms, the loop every 1 ms
+    assert np.allclose(residual, residual[:, :1], atol=1e-9)
+
+
+def test_the_forward_net_maps_pressure_to_contraction_over_the_recording(trained):
+    from host.data import load_measurement
+
+    record = load_measurement(trained[1])
+    forward = load_bundle(trained[2]).forward_net(1.0 / 100)
+    forward.reset()
+    predicted = np.array([forward.step(p) for p in record.u.tolist()])
+    rmse = float(np.sqrt(np.mean((predicted - record.y) ** 2)))
+    assert rmse < 0.15 * float(np.ptp(record.y))  # a model of this muscle, not a constant
+
+
+def test_deployed_and_run_from_target_current_with_the_net_feedforward(trained, capsys):
+    root, _, store = trained
+    target = root / "target"
+    assert main(["deploy", str(store), str(target), "--trusted", str(root / "keys" / "pmactl.pub")]) == 0
+    capsys.readouterr()
+    config = rig_config(root, "net")
+    code = main(["edge", "run", "--config", str(config), "--bundle", str(target / "current"), "--reference", SINE,
+                 "--duration", "3", "--json"])  # fmt: skip
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert code == 0 and summary["faults"] == [] and summary["feedforward_role"] == "net"
+
+
+def test_a_role_the_bundle_cannot_fill_is_one_line_and_exit_2(trained, tmp_path, capsys):
+    root, recording, _ = trained
+    table_only = tmp_path / "table"
+    assert main(["fit", "--model", "mpi", "--train", str(recording), "--units", "bar,mm", "--save",
+                 str(table_only)]) == 0  # fmt: skip
+    capsys.readouterr()
+    config = rig_config(tmp_path, "net+correction")
+    code = main(["edge", "run", "--config", str(config), "--bundle", str(table_only), "--reference", SINE,
+                 "--duration", "1"])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "role 'net+correction'" in err[0] and "can fill table" in err[0]
+
+
+def test_an_edited_net_is_refused_at_load(trained, tmp_path):
+    from edge.errors import BundleError
+
+    release = tmp_path / "release"
+    shutil.copytree(load_bundle(trained[2]).path, release)
+    data = bytearray((release / "inverse_net.onnx").read_bytes())
+    data[-20] ^= 0x01
+    (release / "inverse_net.onnx").write_bytes(bytes(data))
+    with pytest.raises(BundleError, match="checksum mismatch"):
+        load_bundle(release)
+
+
+def test_retraining_into_a_signed_store_without_key_says_unsigned(trained, tmp_path, capsys):
+    root, recording, store = trained
+    copy = tmp_path / "store"
+    shutil.copytree(store, copy, symlinks=True)
+    assert main(["train", "--model", "lstm-narmax", "--train", str(recording), "--units", "bar,mm",
+                 "--epochs", "2", "--save", str(copy)]) == 0  # fmt: skip
+    err = [line for line in capsys.readouterr().err.splitlines() if "UNSIGNED" in line]
+    assert len(err) == 1 and "pmactl bundle sign" in err[0]
+    assert json.loads((copy / "current" / MANIFEST).read_text())["nets"]["inverse"]["step_s"] == pytest.approx(0.01)
