@@ -17,8 +17,9 @@ Two roles use it (:mod:`edge.control.net_roles` builds them from a bundle):
 
 A net was trained at its recording's sample period (``step_s`` in the manifest, 10 ms for
 ``edge record``'s default 100 Hz). On a faster loop it steps every ``ticks_per_step`` ticks;
-the table under it steps every tick and the net's residual ``y - n`` is held in between, so the
-output follows the reference at the loop rate and only the slow rate-dependent part is held.
+the table under it steps every tick and the net's residual ``y - n`` is extrapolated linearly in
+between (from its last two net steps), so the output follows the reference at the loop rate and
+the rate-dependent part does not lag by half a net step.
 """
 
 from __future__ import annotations
@@ -158,22 +159,26 @@ class _HeldResidual:
         self.net, self.table, self.ticks_per_step = net, table, ticks_per_step
         self.input_range = table.input_range
         self._count = 0
-        self._residual = 0.0
+        self._residual = self._slope = 0.0
+        self._first = True
 
     def reset(self) -> None:
         """Table memory back to its rest state, net state cleared (on arming)."""
         self.table.reset()
         self.net.reset()
         self._count = 0
-        self._residual = 0.0
+        self._residual = self._slope = 0.0
+        self._first = True
 
     def _held(self, u: float, n: float) -> float:
-        if self._count == 0:
-            self._residual = self.net.step(u, n) - n
-        self._count += 1
-        if self._count == self.ticks_per_step:
-            self._count = 0
-        return n + self._residual
+        count = self._count
+        if count == 0:
+            residual = self.net.step(u, n) - n
+            # the residual's change per tick, for the ticks until the next net step (first: none)
+            self._slope = 0.0 if self._first else (residual - self._residual) / self.ticks_per_step
+            self._residual, self._first = residual, False
+        self._count = count + 1 if count + 1 < self.ticks_per_step else 0
+        return n + self._residual + self._slope * count
 
     def simulate(self, values: Sequence[float] | np.ndarray) -> np.ndarray:
         """``step`` over every value from the current state."""
@@ -193,6 +198,10 @@ class NetInverse(_HeldResidual):
     """
 
     kind = "lstm-narmax-inverse"
+
+    def __init__(self, net: NarmaxNet, table: CompiledModel, ticks_per_step: int, preview_s: float = 0.0) -> None:
+        super().__init__(net, table, ticks_per_step)
+        self.preview_s = preview_s  # the controller steps this inverse with the reference this far ahead [s]
 
     def step(self, target_mm: float) -> float:
         return self._held(target_mm, self.table.step(target_mm))

@@ -77,7 +77,11 @@ def net_inverse(path: Path, spec: Mapping[str, object], table: CompiledModel, pe
     from edge.control.net_narmax import NarmaxNet, NetInverse
 
     ticks = ticks_per_step(_spec_float(spec, "step_s", path), period_s, path)
-    return NetInverse(NarmaxNet(path, spec), table, ticks)
+    preview = spec.get("preview_s", 0.0)
+    preview_s = float(preview) if isinstance(preview, int | float) and math.isfinite(preview) and preview >= 0 else -1.0
+    if preview_s < 0:
+        raise BundleError(f"{path}: the inverse net's preview_s {preview!r} is not a time >= 0; re-export the bundle")
+    return NetInverse(NarmaxNet(path, spec), table, ticks, preview_s)
 
 
 def net_forward(path: Path, spec: Mapping[str, object], release: Path, period_s: float) -> NetForward:

@@ -108,6 +108,8 @@ class Controller:
         self.correction = correction
         self.limits = limits or Limits()
         self.inverse = inverse
+        # an inverse that anticipates the plant's lag (the net feedforward) is fed the reference ahead
+        self.preview_s = float(getattr(inverse, "preview_s", 0.0))
         self.pid = PID(
             PIDGains(
                 gains.kp, gains.ki, gains.kd, gains.tau_d_s, self.limits.pressure_min_bar, self.limits.pressure_max_bar
@@ -138,7 +140,8 @@ class Controller:
         the command ``u_bar`` and keeps ``reference_mm_`` and ``bias_bar_`` (feedforward +
         correction) as attributes, so no per-tick object is built."""
         reference = self.reference(t)
-        feedforward = self.inverse.step(reference) if self.inverse is not None else 0.0
+        ahead = self.reference(t + self.preview_s) if self.preview_s else reference
+        feedforward = self.inverse.step(ahead) if self.inverse is not None else 0.0
         correction = 0.0
         if self.correction is not None:
             last = self._last_reference

@@ -105,6 +105,7 @@ def save_net_bundle(
             "u_range": list(inverse_net.target_range),
             "n_range": list(inverse_net.table_range),
             "maps": f"{units[1]} -> {units[0]}",
+            "preview_s": inverse_net.preview_steps * step_s,
             "training": {
                 "method": "direct inverse learning over the inverse table, host/train/net_inverse.py",
                 "tail_rmse": inverse_net.tail_rmse_bar,

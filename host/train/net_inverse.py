@@ -13,6 +13,12 @@ command (teacher-forced first, then its own, as on the edge). So the net starts 
 feedforward (head at zero) and learns what the table cannot know: the valve lag and the
 friction that grows with speed, both functions of the reference's recent course.
 
+Preview: the contraction answers a command late, so the command that makes the muscle follow a
+reference must anticipate it. :func:`identify_preview` finds, in the recording, the shift ``d``
+at which the table inverse of the later contraction best matches the command; the net is trained
+on target ``r(k + d)`` for command ``u(k)``, and the edge gives it the reference ``d`` net steps
+ahead (``preview_s`` in the manifest; the reference is a known function of time on the edge).
+
 Validation: the record's last ``tail_fraction`` (20 %) is held out from the weights' training;
 early stopping keeps the weights whose free run reproduces the held-out commands best, and the
 result reports that held-out RMSE [bar] beside the table's alone. The closed-loop number
@@ -36,6 +42,7 @@ from host.train.common import Curve, split_record
 from host.train.lstm_narmax import NarmaxWeights, fit_narmax_net, fused
 
 SMOOTHING_S = 0.05  # Savitzky-Golay window on the measured contraction [s]: sensor noise off, lag kept
+MAX_PREVIEW_S = 0.5  # the longest preview tried [s]: far beyond a valve's and a muscle's lag
 
 
 @dataclass
@@ -48,6 +55,8 @@ class InverseNet:
         tail_rmse_bar: held-out free-run RMSE of the net's command [bar].
         tail_rmse_table_bar: the same for the table inverse alone [bar].
         target_range, table_range: ranges of the net's inputs ``r`` [mm] and ``n`` [bar] in training.
+        preview_steps: how many net steps ahead of the command its target is taken (see
+            :func:`identify_preview`); the edge feeds it the reference that far ahead.
     """
 
     weights: NarmaxWeights
@@ -56,6 +65,7 @@ class InverseNet:
     tail_rmse_table_bar: float
     target_range: tuple[float, float]
     table_range: tuple[float, float]
+    preview_steps: int = 0
 
 
 def inverse_data(
@@ -72,6 +82,22 @@ def inverse_data(
     return target, table, np.asarray(record.u, np.float64)
 
 
+def identify_preview(table: NDArray[np.float64], command: NDArray[np.float64], n_train: int, dt: float) -> int:
+    """Samples ``d`` by which the contraction lags the command: the shift that makes the table
+    inverse of the contraction ``d`` samples later closest (RMS) to the command, on the training part.
+
+    A muscle behind a valve answers a command late (valve lag, line volume, rate friction); a
+    feedforward that is to make the contraction follow a known reference must command what the
+    reference asks ``d`` samples ahead. Identified from the recording, not set by hand.
+    """
+    best, best_rmse = 0, np.inf
+    for d in range(int(MAX_PREVIEW_S / dt) + 1):
+        rmse = float(np.sqrt(np.mean((table[d:n_train] - command[: n_train - d]) ** 2)))
+        if rmse < best_rmse:
+            best, best_rmse = d, rmse
+    return best
+
+
 def train_inverse_net(
     record: Measurement,
     table_inverse: CompiledModel,
@@ -84,6 +110,10 @@ def train_inverse_net(
     """Train the inverse on ``record`` (see module docstring); torch seeded by the caller."""
     target, table, command = inverse_data(record, table_inverse)
     split = split_record(len(record), 0, tail_fraction, record.source)
+    preview = identify_preview(table, command, split.tail, record.dt)
+    if preview:  # the command at k is learned from the target at k + preview (the edge previews the reference)
+        target, table, command = target[preview:], table[preview:], command[:-preview]
+        split = split_record(len(command), 0, tail_fraction, record.source)
     weights, curve = fit_narmax_net(
         target, command, table, split.tail, seed=seed, epochs=epochs, quiet=quiet, label="inverse net"
     )
@@ -98,4 +128,5 @@ def train_inverse_net(
         rmse_table,
         (float(target.min()), float(target.max())),
         (float(table.min()), float(table.max())),
+        preview,
     )
