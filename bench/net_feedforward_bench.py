@@ -56,7 +56,8 @@ def rig_config(directory: Path, seed: int, role: str, trusted: Path) -> Path:
         'url = "sim://rig?clock=lockstep"', f'url = "sim://rig?clock=lockstep&effect=rate_dependence&seed={seed}"'
     )
     text = text.replace("tracking_error_max_mm = 25.0", "tracking_error_max_mm = 80.0")
-    text += f'\n[feedforward]\nrole = "{role}"\n\n[bundle]\ntrusted_keys = ["{trusted}"]\n'
+    text = text.replace("trusted_keys = []", f'trusted_keys = ["{trusted}"]')
+    text += f'\n[feedforward]\nrole = "{role}"\n'
     path = directory / f"rig-{role}.toml"
     path.write_text(text)
     return path
