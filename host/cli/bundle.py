@@ -139,6 +139,12 @@ def describe(directory: str | Path) -> dict[str, object]:
         "provenance": manifest.get("provenance", {"pmactl_version": manifest.get("pmactl_version")}),
         "fit": manifest.get("fit"),
         "golden_samples": report.golden_samples,
+        "roles": manifest.get("roles"),
+        "nets": {
+            which: {k: spec.get(k) for k in ("file", "step_s", "preview_s", "maps")}
+            for which, spec in (manifest.get("nets") or {}).items()  # type: ignore[attr-defined]
+            if isinstance(spec, dict)
+        },
     }
 
 
@@ -152,6 +158,24 @@ def _range(values: object, unit: str) -> str:
         )
         + f"] {unit}"
     )
+
+
+def _roles_line(roles: object) -> str:
+    if not isinstance(roles, dict):
+        return "not recorded (an older release: feedforward table, forward table)"
+    return "; ".join(f"{kind} {', '.join(names)}" for kind, names in roles.items())
+
+
+def _nets_line(nets: object) -> str:
+    if not isinstance(nets, dict) or not nets:
+        return "none"
+    parts = []
+    for which, spec in nets.items():
+        preview = f", preview {spec['preview_s'] * 1e3:g} ms" if spec.get("preview_s") else ""
+        parts.append(
+            f"{which} {spec.get('file')} ({spec.get('maps')}, step {spec.get('step_s', 0) * 1e3:g} ms{preview})"
+        )
+    return "; ".join(parts)
 
 
 def run_inspect(args: argparse.Namespace) -> int:
@@ -172,6 +196,8 @@ def run_inspect(args: argparse.Namespace) -> int:
         f"signer       {record['signer'] or 'unsigned'}",
         f"correction   {json.dumps(record['correction']) if record['correction'] else 'none'}",
         f"quantisation {json.dumps(record['quantisation']) if record['quantisation'] else 'none recorded'}",
+        f"roles        {_roles_line(record['roles'])}",
+        f"nets         {_nets_line(record['nets'])}",
         f"provenance   pmactl {provenance.get('pmactl_version')}, python {provenance.get('python', '?')}, "
         f"host {provenance.get('host', '?')}",
     ]
