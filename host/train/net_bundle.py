@@ -38,6 +38,7 @@ class NetBundle:
     directory: Path
     inverse: InverseNet
     table_model: str
+    step_s: float
 
     def as_dict(self) -> dict[str, object]:
         return {
@@ -45,6 +46,7 @@ class NetBundle:
             "table_model": self.table_model,
             "inverse_tail_rmse_bar": self.inverse.tail_rmse_bar,
             "inverse_table_only_tail_rmse_bar": self.inverse.tail_rmse_table_bar,
+            "inverse_preview_s": self.inverse.preview_steps * self.step_s,
         }
 
 
@@ -128,4 +130,4 @@ def save_net_bundle(
             training_data=[p for p in sources if p.is_file()],
             nets=parts,
         )
-    return NetBundle(Path(directory), inverse_net, table_model)
+    return NetBundle(Path(directory), inverse_net, table_model, step_s)
