@@ -44,7 +44,8 @@ def choose_role(available: list[str], wanted: str, source: str) -> str:
         net = [r for r in available if r.startswith("net")]
         return (net or available)[-1]
     if wanted not in FEEDFORWARD_ROLES:
-        raise BundleError(f"[feedforward] role {wanted!r} unknown; choose one of {', '.join(FEEDFORWARD_ROLES)}")
+        known = ", ".join(FEEDFORWARD_ROLES)
+        raise BundleError(f"{source}: [feedforward] role {wanted!r} unknown; choose one of {known}")
     if wanted not in available:
         raise BundleError(
             f"{source}: [feedforward] role {wanted!r} needs a part this bundle does not hold (it can fill "
