@@ -162,3 +162,15 @@ def test_the_controller_feeds_a_previewing_inverse_the_reference_ahead():
     controller.arm(Readings(0.0))
     command = controller.tick(0.2, 1e-3, Readings(0.0))
     assert inverse.seen == [pytest.approx(25.0)] and command.reference_mm == pytest.approx(20.0)
+
+
+@pytest.mark.parametrize(
+    ("net", "correction", "default"),
+    [(False, False, "table"), (False, True, "table+correction"), (True, False, "net"), (True, True, "net+correction")],
+)
+def test_the_default_role_is_a_net_when_there_is_one_plus_the_correction_when_there_is_one(net, correction, default):
+    from edge.control.net_roles import choose_role, feedforward_roles
+
+    available = feedforward_roles(net, correction)
+    assert choose_role(available, "", "rig.toml") == default
+    assert choose_role(available, "table", "rig.toml") == "table"  # the table is always there
