@@ -70,12 +70,12 @@ def test_the_cli_prints_fits_json_plus_mae_and_time_per_run(rate_records, tmp_pa
     )
     assert code == 0
     record = json.loads(capsys.readouterr().out)
-    assert set(record) == {"model", "fit_seconds", "tests"} and record["model"] == "hammerstein"
+    assert set(record) == {"model", "fit_seconds", "tests", "bundle"} and record["model"] == "hammerstein"
     [result] = record["tests"]
     assert set(result) == {"file", "rmse", "rmse_pct_pp", "max_error", "mae", "ms_per_run"}
     assert 0 < result["mae"] <= result["rmse"] <= result["max_error"] and result["ms_per_run"] > 0
-    saved = json.loads((tmp_path / "ham" / "model.json").read_text())
-    assert saved["step"]["opset"] >= 18 and (tmp_path / "ham" / "training_curve.png").stat().st_size > 1000
+    saved = json.loads((tmp_path / "ham" / "current" / "manifest.json").read_text())
+    assert saved["nets"]["forward"]["opset"] >= 18 and saved["nets"]["forward"]["model"] == "hammerstein"
 
 
 def test_the_cli_refuses_short_data_with_exit_2(tmp_path, capsys):
@@ -136,10 +136,10 @@ def test_save_into_a_folder_holding_a_model_is_refused_before_training_and_keeps
     old.mkdir()
     (old / "model.json").write_text('{"kind": "earlier"}\n')
     (old / "step.onnx").write_bytes(b"earlier")
-    # hammerstein: --save is a model folder (lstm-narmax writes a bundle store: tests/test_net_bundle.py)
+    # an earlier pmactl's model folder: --save writes a bundle store now (tests/test_net_bundle*.py)
     assert main(["train", "--model", "hammerstein", "--train", str(rate_records[0]), "--save", str(old)]) == 2
     err = capsys.readouterr().err
-    assert "already holds a model" in err and "choose a new folder" in err
+    assert "not a pmactl bundle" in err and "choose a new or empty directory" in err
     assert (old / "model.json").read_text() == '{"kind": "earlier"}\n'
     assert (old / "step.onnx").read_bytes() == b"earlier"
 

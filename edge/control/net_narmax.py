@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
@@ -41,6 +42,18 @@ PROBE_STEPS = 400  # parity probe: a two-tone trajectory over the net's training
 WARMUP_RUNS = 100
 
 
+class StepNet(Protocol):
+    """A net step graph with its carried state (:class:`NarmaxNet`,
+    :class:`edge.control.net_hammerstein.HammersteinNet`)."""
+
+    path: Path
+    kind: str  # the model family: "lstm-narmax" | "hammerstein"
+
+    def reset(self) -> None: ...
+
+    def step(self, u: float, n: float) -> float: ...
+
+
 class NarmaxNet:
     """One LSTM-NARMAX step graph with its state; ``step(u, n) -> y``, ``reset()``.
 
@@ -52,6 +65,8 @@ class NarmaxNet:
     Start (after :meth:`reset`): the first step sets the lags to its own inputs (``y(-1) = n``)
     and zeroes the LSTM state, as the trainer's free runs start.
     """
+
+    kind = "lstm-narmax"
 
     def __init__(self, path: str | Path, spec: Mapping[str, object]) -> None:
         import onnxruntime as ort  # on the SBC only when a bundle holds a net
@@ -153,7 +168,7 @@ def _range(value: object, default: tuple[float, float]) -> tuple[float, float]:
 class _HeldResidual:
     """A table stepped every tick plus a net's residual ``y - n`` updated every ``ticks_per_step``."""
 
-    def __init__(self, net: NarmaxNet, table: CompiledModel, ticks_per_step: int) -> None:
+    def __init__(self, net: StepNet, table: CompiledModel, ticks_per_step: int) -> None:
         if ticks_per_step < 1:
             raise BundleError(f"{net.path}: ticks_per_step {ticks_per_step} must be at least 1")
         self.net, self.table, self.ticks_per_step = net, table, ticks_per_step
@@ -199,7 +214,7 @@ class NetInverse(_HeldResidual):
 
     kind = "lstm-narmax-inverse"
 
-    def __init__(self, net: NarmaxNet, table: CompiledModel, ticks_per_step: int, preview_s: float = 0.0) -> None:
+    def __init__(self, net: StepNet, table: CompiledModel, ticks_per_step: int, preview_s: float = 0.0) -> None:
         super().__init__(net, table, ticks_per_step)
         self.preview_s = preview_s  # the controller steps this inverse with the reference this far ahead [s]
 
@@ -211,19 +226,19 @@ class NetForward(_HeldResidual):
     """The net forward model: ``step(pressure_bar) -> mm``, ``reset()`` on arming.
 
     Args:
-        net: the forward step graph (``u`` pressure [bar], ``n`` the operator's output [mm]).
-        table: the tanh-PI operator table, indexed by the warped pressure.
+        net: the forward step graph (``u`` pressure [bar], ``n`` the operator's output [mm]): an
+            LSTM-NARMAX or a Hammerstein (:mod:`edge.control.net_hammerstein`).
+        table: the operator table (tanh-PI indexed by the warped pressure, or the Hammerstein's MPI).
         ticks_per_step: loop ticks per net step.
         warp_centre, warp_half_range: the operator's input warp ``tanh((p - centre) / half_range)``
             (no warp when ``warp_half_range`` is 0).
     """
 
-    kind = "lstm-narmax"
-
     def __init__(
-        self, net: NarmaxNet, table: CompiledModel, ticks_per_step: int, warp_centre: float, warp_half_range: float
+        self, net: StepNet, table: CompiledModel, ticks_per_step: int, warp_centre: float, warp_half_range: float
     ) -> None:
         super().__init__(net, table, ticks_per_step)
+        self.kind = net.kind
         self.warp_centre, self.warp_half_range = warp_centre, warp_half_range
         self.input_range = (-math.inf, math.inf) if warp_half_range > 0 else table.input_range
 

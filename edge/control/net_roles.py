@@ -24,7 +24,7 @@ from edge.errors import BundleError
 from edge.hysteresis.lut import CompiledModel, read_table
 
 if TYPE_CHECKING:
-    from edge.control.net_narmax import NetForward, NetInverse
+    from edge.control.net_narmax import NetForward, NetInverse, StepNet
 
 FEEDFORWARD_ROLES = ("table", "table+correction", "net", "net+correction")
 FORWARD_ROLES = ("table", "net")
@@ -49,7 +49,8 @@ def choose_role(available: list[str], wanted: str, source: str) -> str:
     if wanted not in available:
         raise BundleError(
             f"{source}: [feedforward] role {wanted!r} needs a part this bundle does not hold (it can fill "
-            f"{', '.join(available)}); choose one of those, or train it (pmactl train --model lstm-narmax --save)"
+            f"{', '.join(available)}); choose one of those, or train it "
+            "(pmactl train --model lstm-narmax|hammerstein --save)"
         )
     return wanted
 
@@ -73,21 +74,29 @@ def _spec_float(spec: Mapping[str, object], key: str, where: Path) -> float:
     return float(value)
 
 
+def step_net(path: Path, spec: Mapping[str, object]) -> StepNet:
+    """The evaluator of a net step graph: Hammerstein or LSTM-NARMAX, told by its carried state."""
+    from edge.control.net_hammerstein import HammersteinNet, is_hammerstein
+    from edge.control.net_narmax import NarmaxNet
+
+    return HammersteinNet(path, spec) if is_hammerstein(spec) else NarmaxNet(path, spec)
+
+
 def net_inverse(path: Path, spec: Mapping[str, object], table: CompiledModel, period_s: float) -> NetInverse:
     """The net feedforward over ``table`` (the bundle's inverse table) at loop period ``period_s`` [s]."""
-    from edge.control.net_narmax import NarmaxNet, NetInverse
+    from edge.control.net_narmax import NetInverse
 
     ticks = ticks_per_step(_spec_float(spec, "step_s", path), period_s, path)
     preview = spec.get("preview_s", 0.0)
     preview_s = float(preview) if isinstance(preview, int | float) and math.isfinite(preview) and preview >= 0 else -1.0
     if preview_s < 0:
         raise BundleError(f"{path}: the inverse net's preview_s {preview!r} is not a time >= 0; re-export the bundle")
-    return NetInverse(NarmaxNet(path, spec), table, ticks, preview_s)
+    return NetInverse(step_net(path, spec), table, ticks, preview_s)
 
 
 def net_forward(path: Path, spec: Mapping[str, object], release: Path, period_s: float) -> NetForward:
     """The net forward model (pressure [bar] -> contraction [mm]) with its operator table."""
-    from edge.control.net_narmax import NarmaxNet, NetForward
+    from edge.control.net_narmax import NetForward
 
     operator = spec.get("operator")
     if not isinstance(operator, Mapping) or not isinstance(operator.get("file"), str):
@@ -95,7 +104,7 @@ def net_forward(path: Path, spec: Mapping[str, object], release: Path, period_s:
     table = CompiledModel(read_table(release / str(operator["file"])))
     ticks = ticks_per_step(_spec_float(spec, "step_s", path), period_s, path)
     return NetForward(
-        NarmaxNet(path, spec),
+        step_net(path, spec),
         table,
         ticks,
         _spec_float(operator, "warp_centre", path),

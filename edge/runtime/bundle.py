@@ -64,6 +64,7 @@ class Bundle:
     manifest_sha256: str = ""
     signer: str | None = None
     net_paths: dict[str, Path] = field(default_factory=dict)  # "forward" / "inverse" -> the ONNX step graph
+    net_golden_samples: int = 0  # net golden inputs replayed on load
 
     @property
     def release_id(self) -> str:
@@ -117,7 +118,9 @@ class Bundle:
         from edge.control.net_roles import net_inverse
 
         if "inverse" not in self.net_paths:
-            raise BundleError(f"{self.path}: holds no inverse net; train one with pmactl train --model lstm-narmax")
+            raise BundleError(
+                f"{self.path}: holds no inverse net; train one with pmactl train --model lstm-narmax --save"
+            )
         return net_inverse(self.net_paths["inverse"], self.net_spec("inverse"), self.inverse, period_s)
 
     def forward_net(self, period_s: float) -> NetForward:
@@ -125,7 +128,9 @@ class Bundle:
         from edge.control.net_roles import net_forward
 
         if "forward" not in self.net_paths:
-            raise BundleError(f"{self.path}: holds no forward net; train one with pmactl train --model lstm-narmax")
+            raise BundleError(
+                f"{self.path}: holds no forward net; train one with pmactl train --model lstm-narmax --save"
+            )
         return net_forward(self.net_paths["forward"], self.net_spec("forward"), self.path, period_s)
 
     def require_units(self, input_unit: str, output_unit: str) -> None:
@@ -245,7 +250,7 @@ def _load(release: Path, trusted: Sequence[tuple[str, bytes]] | None) -> Bundle:
     if net_paths:
         if "golden" not in paths:
             raise BundleError(f"{manifest_path}: nets without golden vectors; re-export the bundle")
-        replay_net_golden(paths["golden"], bundle)
+        bundle.net_golden_samples = replay_net_golden(paths["golden"], bundle)
     return bundle
 
 
@@ -268,13 +273,15 @@ def _net_paths(manifest_path: Path, manifest: dict[str, object], paths: dict[str
     return found
 
 
-def replay_net_golden(path: Path, bundle: Bundle) -> None:
-    """Replay the nets' recorded inputs through fresh edge evaluators (one net step per input)."""
+def replay_net_golden(path: Path, bundle: Bundle) -> int:
+    """Replay the nets' recorded inputs through fresh edge evaluators (one net step per input);
+    returns the inputs replayed."""
     try:
         with np.load(path, allow_pickle=False) as data:
             vectors = {k: np.asarray(data[k], dtype=float) for k in data.files}
     except (OSError, ValueError) as exc:
         raise BundleError(f"{path}: golden vectors unreadable ({exc}); re-export the bundle") from exc
+    replayed = 0
     for which in bundle.net_paths:
         try:
             u, expected = vectors[f"{which}_net_input"], vectors[f"{which}_net_output"]
@@ -291,6 +298,8 @@ def replay_net_golden(path: Path, bundle: Bundle) -> None:
                 f"{path.parent}: the {which} net does not reproduce its golden vectors ({mismatch}): "
                 "it was changed after export; re-export the bundle"
             )
+        replayed += int(u.size)
+    return replayed
 
 
 def _read_plain(release: Path, name: str) -> bytes:

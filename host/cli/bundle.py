@@ -141,7 +141,10 @@ def describe(directory: str | Path) -> dict[str, object]:
         "golden_samples": report.golden_samples,
         "roles": manifest.get("roles"),
         "nets": {
-            which: {k: spec.get(k) for k in ("file", "step_s", "preview_s", "maps")}
+            which: {
+                k: spec.get(k, "lstm-narmax" if k == "model" else None)
+                for k in ("model", "file", "step_s", "preview_s", "maps")
+            }
             for which, spec in (manifest.get("nets") or {}).items()  # type: ignore[attr-defined]
             if isinstance(spec, dict)
         },
@@ -173,7 +176,8 @@ def _nets_line(nets: object) -> str:
     for which, spec in nets.items():
         preview = f", preview {spec['preview_s'] * 1e3:g} ms" if spec.get("preview_s") else ""
         parts.append(
-            f"{which} {spec.get('file')} ({spec.get('maps')}, step {spec.get('step_s', 0) * 1e3:g} ms{preview})"
+            f"{which} {spec.get('model')} {spec.get('file')} ({spec.get('maps')}, step "
+            f"{spec.get('step_s', 0) * 1e3:g} ms{preview})"
         )
     return "; ".join(parts)
 

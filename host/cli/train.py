@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -19,6 +18,7 @@ if TYPE_CHECKING:
     from host.train.net_bundle import NetBundle
 
 DEFAULT_EPOCHS = {"hammerstein": 60, "lstm-narmax": 150, "correction": 300}
+BUNDLE_MODELS = ("lstm-narmax", "hammerstein")  # --save writes a bundle store
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
@@ -53,10 +53,10 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
     train.add_argument(
         "--save",
         metavar="DIR",
-        help="lstm-narmax: write a bundle store (tables, forward and inverse nets; new release in an existing "
-        "store); hammerstein: a model folder (step.onnx, model.json, operator.npz); correction: the training curve",
+        help="lstm-narmax, hammerstein: write a bundle store (tables, the forward net and an inverse LSTM-NARMAX "
+        "trained with --epochs too; new release in an existing store); correction: the training curve",
     )
-    add_key_option(train, "(of --save for lstm-narmax, of --bundle for --model correction)")
+    add_key_option(train, "(of --save for lstm-narmax and hammerstein, of --bundle for --model correction)")
     add_data_options(train)
     train.set_defaults(run=lazy("host.cli.train"))
 
@@ -68,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
         raise DataError(f"--epochs {args.epochs} must be at least 1")
     if args.epochs is None:
         args.epochs = DEFAULT_EPOCHS[args.model]
-    if args.model == "lstm-narmax":
+    if args.model in BUNDLE_MODELS:
         signed_before = _check_store(args.save, args.key) if args.save else None
     elif args.save:
         _check_save(args.save)  # before training: a bad path costs nothing and nothing is half-written
@@ -76,16 +76,16 @@ def run(args: argparse.Namespace) -> int:
         return _run_correction(args)
     if args.bundle:
         raise DataError("--bundle applies to --model correction only; use --save DIR for a trained model")
-    if args.key and not (args.model == "lstm-narmax" and args.save):
+    if args.key and not (args.model in BUNDLE_MODELS and args.save):
         raise DataError(
-            f"--key signs a bundle's new release, and --model {args.model} writes none here (lstm-narmax with "
-            "--save writes one); drop --key"
+            f"--key signs a bundle's new release, and --model {args.model} writes none here (--save writes one); "
+            "drop --key"
         )
     if not 0 < args.calibration < 0.9:
         raise DataError(f"--calibration {args.calibration} must be between 0 and 0.9")
     import numpy as np
 
-    from host.train import save_model, score_model, train_model
+    from host.train import score_model, train_model
     from host.workflow import warn_extrapolation
 
     records = [read_measurement(path, args) for path in args.train]
@@ -115,10 +115,7 @@ def run(args: argparse.Namespace) -> int:
             "fit_seconds": trained.fit_seconds,
             "tests": tests_json,
         }
-        if args.model == "lstm-narmax":
-            written = _save_bundle(args, trained, records, record)
-        else:
-            save_model(trained, args.save, record)
+        written = _save_bundle(args, trained, records, record, tests)
     if args.json:
         # the documented keys only (tests/test_train.py); warnings went to stderr
         out: dict[str, object] = {"model": args.model, "fit_seconds": trained.fit_seconds, "tests": tests_json}
@@ -149,14 +146,16 @@ def run(args: argparse.Namespace) -> int:
     if written is not None:
         inv = written.inverse
         print(
-            f"bundle written to {args.save}: {written.table_model} tables, forward and inverse LSTM-NARMAX; inverse "
+            f"bundle written to {args.save}: {written.table_model} tables, forward {args.model}, inverse LSTM-NARMAX; "
+            "inverse "
             f"net held-out command RMSE {inv.tail_rmse_bar:.4f} bar (table alone {inv.tail_rmse_table_bar:.4f} bar)"
         )
+        for score in written.inverse_tests:
+            print(
+                f"  inverse on held-out {score.name}: command RMSE {score.rmse_bar:.4f} bar "
+                f"(table alone {score.table_rmse_bar:.4f} bar, {score.samples} samples)"
+            )
         report_signing(args.save, args.key, signed_before, json_output=False)
-    elif args.save:
-        print(
-            f"model written to {args.save} (step.onnx, model.json, operator.npz, training_curve.png)", file=sys.stdout
-        )
     return 0
 
 
@@ -178,13 +177,17 @@ def _check_store(path: str, key: str | None) -> str | None:
 
 
 def _save_bundle(
-    args: argparse.Namespace, trained: Trained, records: list[Measurement], record: dict[str, object]
+    args: argparse.Namespace,
+    trained: Trained,
+    records: list[Measurement],
+    record: dict[str, object],
+    tests: list[Measurement],
 ) -> NetBundle:
     from host.cli.fit import bundle_units
     from host.train.net_bundle import save_net_bundle
 
     units = bundle_units(records[0])
-    return save_net_bundle(trained, records, args.save, units, record, epochs=args.epochs, quiet=args.json)
+    return save_net_bundle(trained, records, args.save, units, record, epochs=args.epochs, quiet=args.json, tests=tests)
 
 
 def _check_save(path: str) -> None:

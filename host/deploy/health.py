@@ -56,7 +56,7 @@ def verify_release(
     signer = bundle.signer
     if signer is None and read_signature(bundle.path) is not None:
         signer = verify_signature(bundle.path, (bundle.path / "manifest.json").read_bytes(), None)
-    samples = _golden_table_samples(bundle) + replay_correction_golden(bundle)
+    samples = _golden_table_samples(bundle) + replay_correction_golden(bundle) + bundle.net_golden_samples
     return bundle, HealthReport(bundle.release_id, signer, samples)
 
 

@@ -1,13 +1,16 @@
-"""``pmactl train --model lstm-narmax --save DIR``: the trained nets as a bundle the edge runs.
+"""``pmactl train --model lstm-narmax|hammerstein --save DIR``: the trained nets as a bundle the edge runs.
 
 The bundle (:mod:`models_export.bundle`) holds, from the same training recording(s):
 
 * the rate-independent table model (``forward.npz`` / ``inverse.npz``), fitted as
   ``pmactl fit --model TABLE_MODEL`` would: the ``table`` feedforward role and the table forward;
-* the forward LSTM-NARMAX (``forward_net.onnx``, its tanh-PI operator as ``operator.npz``):
-  pressure [bar] -> contraction [mm], the forward model a twin runs;
+* the forward net (``forward_net.onnx``, its operator as ``operator.npz``): pressure [bar] ->
+  contraction [mm], the forward model a twin runs. The trained model: the LSTM-NARMAX (Wu2025,
+  tanh-PI operator) or the Hammerstein (Ai2019, MPI -> BP net on [u, y_MPI] -> ARX);
 * the inverse LSTM-NARMAX (``inverse_net.onnx``) over the table inverse, trained by direct
-  inverse learning (:mod:`host.train.net_inverse`): the ``net`` feedforward role.
+  inverse learning (:mod:`host.train.net_inverse`): the ``net`` feedforward role. The same
+  inverse for both forward models: why the Hammerstein's inverse is this net and not a per-tick
+  solve of the inverse ARX and static net is in :mod:`host.train.net_inverse`.
 
 Each net is one ONNX step graph with its state as explicit inputs and outputs, golden vectors
 recorded by the edge's own evaluators (replayed on every load).
@@ -16,7 +19,7 @@ recorded by the edge's own evaluators (replayed on every load).
 from __future__ import annotations
 
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -25,10 +28,14 @@ from edge.errors import DataError
 from edge.hysteresis.lut import CompiledModel
 from host.data import Measurement
 from host.train import Trained, join
-from host.train.net_inverse import InverseNet, train_inverse_net
+from host.train.net_inverse import InverseNet, InverseScore, score_inverse, train_inverse_net
 
 TABLE_MODEL = "mpi"  # Ai2019's feedforward model; identified in about a second on 10^4 samples
 SAMPLE_PERIOD_RTOL = 1e-6
+FORWARD_METHODS = {
+    "lstm-narmax": "LSTM-NARMAX (Wu2025), host/train/lstm_narmax.py",
+    "hammerstein": "Hammerstein (Ai2019: MPI -> BP net on [u, y_MPI] -> ARX), host/train/hammerstein.py",
+}
 
 
 @dataclass
@@ -39,14 +46,18 @@ class NetBundle:
     inverse: InverseNet
     table_model: str
     step_s: float
+    forward_model: str = "lstm-narmax"
+    inverse_tests: list[InverseScore] = field(default_factory=list)  # on the --test recordings
 
     def as_dict(self) -> dict[str, object]:
         return {
             "bundle": str(self.directory),
             "table_model": self.table_model,
+            "forward_model": self.forward_model,
             "inverse_tail_rmse_bar": self.inverse.tail_rmse_bar,
             "inverse_table_only_tail_rmse_bar": self.inverse.tail_rmse_table_bar,
             "inverse_preview_s": self.inverse.preview_steps * self.step_s,
+            "inverse_tests": [score.as_dict() for score in self.inverse_tests],
         }
 
 
@@ -69,16 +80,19 @@ def save_net_bundle(
     epochs: int,
     quiet: bool = True,
     table_model: str = TABLE_MODEL,
+    tests: list[Measurement] | None = None,
 ) -> NetBundle:
-    """Fit the table, train the inverse net, export both nets and write the bundle at ``directory``."""
+    """Fit the table, train the inverse net, export both nets and write the bundle at ``directory``;
+    the inverse is scored on ``tests`` (recordings not trained on, :func:`score_inverse`)."""
+    from host.train.hammerstein import Hammerstein
     from host.train.lstm_narmax import LSTMNarmax
     from host.workflow import make_estimator, rest_state
     from models_export.bundle import NetPart, write_bundle
     from models_export.onnx_step import export_step
 
     model = trained.model
-    if not isinstance(model, LSTMNarmax):
-        raise DataError(f"--save writes a bundle for --model lstm-narmax; {model.kind} is not supported yet")
+    if not isinstance(model, LSTMNarmax | Hammerstein):
+        raise DataError(f"--save writes a bundle for --model lstm-narmax|hammerstein, not {model.kind}")
     step_s = sample_period(records)
     joined = join(records)
     estimator = make_estimator(table_model).fit(joined.u, joined.y)
@@ -91,18 +105,20 @@ def save_net_bundle(
     # the operator table is stored at the vented rest state the edge arms in
     operator.model.reset(float(operator.warp(np.array([joined.u.min()]))[0]), "descending")
     with tempfile.TemporaryDirectory() as scratch:
-        forward_path, spec = export_step("lstm-narmax", model.weights, Path(scratch) / "forward.onnx")
-        inverse_path, _ = export_step("lstm-narmax", inverse_net.weights, Path(scratch) / "inverse.onnx")
+        forward_path, spec = export_step(model.kind, model.weights, Path(scratch) / "forward.onnx")
+        inverse_path, inverse_step = export_step("lstm-narmax", inverse_net.weights, Path(scratch) / "inverse.onnx")
         forward_spec: dict[str, object] = {
             **spec.as_dict(),
+            "model": model.kind,
             "step_s": step_s,
             "u_range": [float(joined.u.min()), float(joined.u.max())],
             "n_range": [float(n_forward.min()), float(n_forward.max())],
             "maps": f"{units[0]} -> {units[1]}",
-            "training": {"method": "LSTM-NARMAX (Wu2025), host/train/lstm_narmax.py", **record_info},
+            "training": {"method": FORWARD_METHODS[model.kind], **record_info},
         }
         inverse_spec: dict[str, object] = {
-            **spec.as_dict(),
+            **inverse_step.as_dict(),
+            "model": "lstm-narmax",
             "step_s": step_s,
             "u_range": list(inverse_net.target_range),
             "n_range": list(inverse_net.table_range),
@@ -120,7 +136,7 @@ def save_net_bundle(
             NetPart("inverse", inverse_path, inverse_spec),
         ]
         sources = [Path(r.source) for r in records]
-        fit_record = {"model": table_model, "samples": len(joined), "nets": "lstm-narmax", **record_info}
+        fit_record = {"model": table_model, "samples": len(joined), "nets": model.kind, **record_info}
         write_bundle(
             directory,
             forward_table,
@@ -130,4 +146,5 @@ def save_net_bundle(
             training_data=[p for p in sources if p.is_file()],
             nets=parts,
         )
-    return NetBundle(Path(directory), inverse_net, table_model, step_s)
+    scores = [score_inverse(inverse_net, r, CompiledModel(inverse_table.compile())) for r in tests or []]
+    return NetBundle(Path(directory), inverse_net, table_model, step_s, model.kind, scores)

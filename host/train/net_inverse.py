@@ -21,7 +21,9 @@ ahead (``preview_s`` in the manifest; the reference is a known function of time 
 
 Validation: the record's last ``tail_fraction`` (20 %) is held out from the weights' training;
 early stopping keeps the weights whose free run reproduces the held-out commands best, and the
-result reports that held-out RMSE [bar] beside the table's alone. The closed-loop number
+result reports that held-out RMSE [bar] beside the table's alone. Recordings never trained on
+(``train --test``) are scored the same way by :func:`score_inverse`: the net, run free from its
+start over the record's contraction, against the command that produced it. The closed-loop number
 (tracking RMS with the net feedforward against the table's on the HIL) is in
 ``bench/net_feedforward_bench.py``. Limit: the recording must cover the references' range and
 rates (``pmactl edge record --protocol sines --range`` over the working range).
@@ -130,3 +132,38 @@ def train_inverse_net(
         (float(table.min()), float(table.max())),
         preview,
     )
+
+
+@dataclass
+class InverseScore:
+    """The inverse on one held-out recording: command RMSE [bar] of the net and of the table alone."""
+
+    name: str
+    samples: int
+    rmse_bar: float
+    table_rmse_bar: float
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "file": self.name,
+            "samples": self.samples,
+            "rmse_bar": self.rmse_bar,
+            "table_rmse_bar": self.table_rmse_bar,
+        }
+
+
+def score_inverse(
+    inverse: InverseNet, record: Measurement, table_inverse: CompiledModel, skip_fraction: float = 0.1
+) -> InverseScore:
+    """Replay ``record``'s (smoothed) contraction through the inverse from its start, as the edge
+    does (the target ``preview_steps`` ahead of the command), and score the commands it gives
+    against the recorded ones after the first ``skip_fraction`` (the net's state settling)."""
+    target, table, command = inverse_data(record, table_inverse)
+    d = inverse.preview_steps
+    if d:
+        target, table, command = target[d:], table[d:], command[:-d]
+    predicted = fused(inverse.weights).simulate(target, table)
+    scored = slice(int(skip_fraction * command.size), None)
+    rms = lambda e: float(np.sqrt(np.mean(e[scored] ** 2)))  # noqa: E731
+    name = str(record.source).rsplit("/", 1)[-1]
+    return InverseScore(name, command[scored].size, rms(predicted - command), rms(table - command))
