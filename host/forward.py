@@ -2,8 +2,10 @@
 
 Two kinds of folder:
 
-* a *bundle* (``pmactl fit --save``): its verified forward lookup table;
-* a *trained net* (``pmactl train --save``: ``model.json``, ``step.onnx``, ``operator.npz``): the
+* a *bundle* (``pmactl fit --save``, ``pmactl train --save``): its verified forward net when it
+  holds one (the edge's own evaluator, :class:`BundleNetForward`), else or with ``role="table"``
+  its verified forward lookup table;
+* an older *trained net* folder (``model.json``, ``step.onnx``, ``operator.npz``): the
   operator's lookup table, then the ONNX step graph in free run, run by the faster evaluator
   that reproduces the onnxruntime session (the fused numpy step for LSTM-NARMAX, see
   :mod:`edge.control.fused_graph`; onnxruntime otherwise).
@@ -21,6 +23,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,6 +33,9 @@ from edge.control.fused_graph import Choice, choose, narmax_from_graph
 from edge.control.onnx_graph import GraphFormatError, read_graph
 from edge.errors import BundleError, ModelError
 from edge.hysteresis.lut import CompiledModel, load_compiled
+
+if TYPE_CHECKING:
+    from edge.runtime.bundle import Bundle
 
 INITIAL_STATES = ("rest", "ascending", "descending")
 NET_KINDS = ("lstm-narmax", "hammerstein")
@@ -141,12 +147,43 @@ class NetForward:
         return np.array([step(a, b) for a, b in zip(u.tolist(), n.tolist())])
 
 
-def load_forward(folder: str | Path) -> TableForward | NetForward:
-    """The forward model saved in ``folder`` (see module docstring); one clear error otherwise."""
+class BundleNetForward:
+    """A bundle's forward net run by the edge's own evaluator (:meth:`edge.runtime.bundle.Bundle.forward_net`),
+    one net step per input sample: the input must be sampled at the net's ``step_s``."""
+
+    def __init__(self, bundle: Bundle) -> None:
+        spec = bundle.net_spec("forward")
+        self.step_s = float(spec["step_s"])  # type: ignore[arg-type]  # checked when the bundle loaded
+        self.model = bundle.forward_net(self.step_s)
+        self.kind = self.model.kind
+        self.evaluator = self.model.net.choice.evaluator
+        self.description = f"{self.kind} net of the bundle ({bundle.release_id})"
+
+    def run(self, u: NDArray[np.float64], initial: str) -> NDArray[np.float64]:
+        """Output for ``u`` [output units] from ``initial`` (see module docstring)."""
+        model = self.model
+        model.reset()
+        x = np.asarray(u, np.float64)
+        if model.warp_half_range > 0:
+            x = np.tanh((x - model.warp_centre) / model.warp_half_range)
+        lo, hi = _wipe_range(model.table, x)
+        _prime(model.table, float(x[0]), initial, lo, hi)  # the operator's memory; the net starts afresh
+        return model.simulate(u)
+
+
+def load_forward(folder: str | Path, role: str | None = None) -> TableForward | NetForward | BundleNetForward:
+    """The forward model saved in ``folder`` (see module docstring); one clear error otherwise.
+
+    ``role``: ``table`` or ``net``; ``None`` is the net when the folder holds one, else the table.
+    """
     folder = Path(folder)
+    if role not in (None, "table", "net"):
+        raise ModelError(f"forward role {role!r} unknown; use table or net")
     if not folder.is_dir():
         raise BundleError(f"{folder}: not a folder; give the folder pmactl fit --save or pmactl train --save wrote")
     if (folder / "model.json").is_file():
+        if role == "table":
+            raise BundleError(f"{folder}: a trained net folder holds no forward table; drop --role table")
         return NetForward(folder)
     if not ((folder / "manifest.json").is_file() or (folder / "current").exists()):
         raise BundleError(
@@ -156,5 +193,12 @@ def load_forward(folder: str | Path) -> TableForward | NetForward:
     from edge.runtime.bundle import load_bundle
 
     bundle = load_bundle(folder)
+    if role == "net" and "forward" not in bundle.net_paths:
+        raise BundleError(
+            f"{folder}: holds no forward net (a table bundle); drop --role net, or train one with "
+            "pmactl train --model lstm-narmax|hammerstein --save"
+        )
+    if role != "table" and "forward" in bundle.net_paths:
+        return BundleNetForward(bundle)
     kind = bundle.identity.get("kind")
     return TableForward(bundle.forward, f"{kind} bundle ({bundle.release_id})")

@@ -97,3 +97,40 @@ def test_deployed_and_run_with_the_net_feedforward(trained, store, capsys):
                  "--reference", SINE, "--duration", "2", "--json"])  # fmt: skip
     summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert code == 0 and summary["faults"] == [] and summary["feedforward_role"] == "net"
+
+
+def test_simulate_runs_the_forward_net_and_the_table_on_request(trained, store, tmp_path, capsys):
+    from host.data import load_measurement
+
+    held = trained[1][1]
+    assert main(["simulate", str(store), str(held), "--out", str(tmp_path / "net.csv")]) == 0
+    assert main(["simulate", str(store), str(held), "--out", str(tmp_path / "table.csv"), "--role", "table"]) == 0
+    net_line, table_line = capsys.readouterr().out.strip().splitlines()
+    assert net_line.startswith("hammerstein net of the bundle") and "lookup table" in table_line
+    net = np.loadtxt(tmp_path / "net.csv", delimiter=",", skiprows=1)[:, 2]
+    forward = load_bundle(store).forward_net(0.01)
+    forward.reset()
+    expected = forward.simulate(load_measurement(held).u)
+    assert np.allclose(net, expected, rtol=1e-6, atol=1e-6)
+    table = np.loadtxt(tmp_path / "table.csv", delimiter=",", skiprows=1)[:, 2]
+    assert np.max(np.abs(net - table)) > 0.01  # a different model, not the table twice
+
+
+def test_simulate_refuses_a_net_role_without_a_net_and_an_input_at_another_rate(trained, store, tmp_path, capsys):
+    recording = trained[1][0]
+    table_only = tmp_path / "table"
+    assert main(["fit", "--model", "mpi", "--train", str(recording), "--units", "bar,mm", "--save",
+                 str(table_only)]) == 0  # fmt: skip
+    capsys.readouterr()
+    assert main(["simulate", str(table_only), str(recording), "--out", str(tmp_path / "a.csv"), "--role", "net"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "holds no forward net" in err[0]
+    fast = tmp_path / "fast.csv"
+    rows = np.loadtxt(recording, delimiter=",", skiprows=1)
+    rows[:, 0] *= 0.5  # the same samples at 200 Hz
+    header = recording.read_text().splitlines()[0]
+    np.savetxt(fast, rows, delimiter=",", header=header, comments="", fmt="%.9g")
+    assert main(["simulate", str(store), str(fast), "--out", str(tmp_path / "b.csv")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "steps every 10 ms" in err[0] and "--role table" in err[0]
+    assert not (tmp_path / "a.csv").exists() and not (tmp_path / "b.csv").exists()

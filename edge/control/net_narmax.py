@@ -48,6 +48,7 @@ class StepNet(Protocol):
 
     path: Path
     kind: str  # the model family: "lstm-narmax" | "hammerstein"
+    choice: Choice  # which evaluator runs it, and why
 
     def reset(self) -> None: ...
 

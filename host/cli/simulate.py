@@ -23,6 +23,7 @@ from host.cli.options import add_data_options
 from host.cli.outputs import OutputPathError, check_output
 
 CALIBRATION_FRACTION = 0.1  # share of the record after the input moves, as pmactl fit --test
+SAMPLE_PERIOD_RTOL = 0.01  # a net's input may be sampled this much off its step (clock jitter of a recording)
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
@@ -37,6 +38,12 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
         default="rest",
         help="start state: rest (as compiled), the ascending or descending outer branch at u[0], or estimate "
         "(needs y: the start that fits the first 10%% after the input moves best)",
+    )
+    simulate.add_argument(
+        "--role",
+        choices=["table", "net"],
+        help="which forward model of a bundle: the lookup table or the forward net (default: the net when the "
+        "bundle holds one; a net steps once per input sample, so the input must be sampled at its step)",
     )
     add_data_options(simulate, units=False)
     simulate.set_defaults(run=lazy("host.cli.simulate"))
@@ -71,7 +78,15 @@ def run(args: argparse.Namespace) -> int:
         raise DataError(
             f"{data}: --initial estimate needs a measured y column; give --initial rest, ascending or descending"
         )
-    model = load_forward(args.bundle)
+    model = load_forward(args.bundle, args.role)
+    step_s = getattr(model, "step_s", None)
+    if step_s is not None and u.size > 1:
+        dt = float(np.median(np.diff(t)))
+        if abs(dt - step_s) > SAMPLE_PERIOD_RTOL * step_s:
+            raise DataError(
+                f"{data}: sampled every {dt * 1e3:.4g} ms, the bundle's forward net steps every {step_s * 1e3:.4g} "
+                "ms; resample the input to that step, or give --role table"
+            )
     if args.initial == "estimate":
         assert y is not None
         start, end = calibration_window(u, CALIBRATION_FRACTION)

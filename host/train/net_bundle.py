@@ -116,6 +116,9 @@ def save_net_bundle(
             "maps": f"{units[0]} -> {units[1]}",
             "training": {"method": FORWARD_METHODS[model.kind], **record_info},
         }
+        if isinstance(model, Hammerstein):  # the ARX AIC chose, for the reader (the graph holds it too)
+            w = model.weights
+            forward_spec["arx"] = {"orders": list(w.orders), "a": w.a.tolist(), "b": w.b.tolist()}
         inverse_spec: dict[str, object] = {
             **inverse_step.as_dict(),
             "model": "lstm-narmax",
