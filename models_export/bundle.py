@@ -206,6 +206,25 @@ def add_correction(directory: str | Path, model_path: str | Path, spec: dict[str
     return _derive(directory, change)
 
 
+def replace_net(directory: str | Path, which: str, model_path: str | Path, quantisation: dict[str, object]) -> Path:
+    """Replace the ``which`` (forward/inverse) net's step graph by ``model_path`` (a quantised variant
+    of it, same inputs, outputs and state) as a new release; ``quantisation`` goes into its
+    ``nets`` entry. Golden vectors are recorded again by the edge's evaluators; any signature is
+    dropped (sign the new release again)."""
+
+    def change(staging: Path, manifest: dict[str, object]) -> None:
+        nets, files = manifest.get("nets"), manifest["files"]
+        assert isinstance(files, dict)
+        if not isinstance(nets, dict) or not isinstance(nets.get(which), dict):
+            raise BundleError(f"{directory}: holds no {which} net to replace")
+        name = str(nets[which]["file"])
+        shutil.copyfile(model_path, staging / name)
+        files[name] = {**files[name], "sha256": sha256_file(staging / name)}
+        nets[which]["quantisation"] = quantisation
+
+    return _derive(directory, change)
+
+
 def update_manifest(directory: str | Path, **fields: object) -> Path:
     """Set top-level manifest fields (e.g. ``quantisation={...}``) in a new release, atomically.
 

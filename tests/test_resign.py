@@ -128,13 +128,14 @@ def test_key_with_a_net_that_writes_no_bundle_is_one_line(tmp_path, capsys):
     assert status == 2 and len(err.strip().splitlines()) == 1 and "--key" in err and "drop --key" in err
 
 
-def test_a_trained_net_is_never_saved_into_a_bundle_store(fitted, tmp_path, capsys):
+def test_a_trained_net_saved_into_a_bundle_store_is_a_new_release_and_the_old_one_stays(fitted, tmp_path, capsys):
     store = copy_store(fitted, tmp_path / "store")
-    before = sorted(p.name for p in store.iterdir())
-    argv = ["train", "--model", "hammerstein", "--train", str(example_path("train")), "--save", str(store)]
-    status, _, err = cli(capsys, *argv)
-    assert status == 2 and "is a bundle directory" in err and len(err.strip().splitlines()) == 1
-    assert sorted(p.name for p in store.iterdir()) == before
+    before = resolve_release(store)
+    argv = ["train", "--model", "hammerstein", "--train", str(example_path("train")), "--epochs", "2",
+            "--save", str(store)]  # fmt: skip
+    status, _, _ = cli(capsys, *argv)
+    assert status == 0 and resolve_release(store) != before and before.is_dir()
+    assert "forward" in json.loads((resolve_release(store) / "manifest.json").read_text())["nets"]
 
 
 # -- format_version -------------------------------------------------------------------------
