@@ -5,7 +5,7 @@ Everything goes through the CLI a user types, on one emulated muscle (``sim://ri
 
 1. ``pmactl edge record --protocol sines --range 0:6``: an ordinary open-loop identification
    recording (pressure sines 0.1-2 Hz), not the tracking test;
-2. ``pmactl train --model lstm-narmax --save STORE --key KEY``: tables, forward and inverse nets;
+2. ``pmactl train --model MODEL --save STORE --key KEY``: tables, forward and inverse nets;
 3. ``pmactl deploy STORE TARGET --trusted PUB``;
 4. ``pmactl edge run --bundle TARGET/current`` with ``[feedforward] role = "table"`` and
    ``"net"`` (and PID alone), seed 000's sine ``30 sin(2 pi f t) + 40`` mm (Ai2019) at 1 Hz and
@@ -15,7 +15,8 @@ The rig config raises ``tracking_error_max_mm`` to 80 mm: at 1 Hz the table-feed
 lags by about 40 degrees and the default 25 mm limit would stop it. Targets (issue 30): net RMS
 at most 0.7x the table's at 1 Hz, no worse at 0.2 Hz.
 
-    python bench/net_feedforward_bench.py [--seed 1] [--sample-hz 100] [--epochs 150] [--keep DIR]
+    python bench/net_feedforward_bench.py [--seed 1] [--model lstm-narmax|hammerstein] [--sample-hz 100]
+        [--epochs 150] [--keep DIR]
 """
 
 from __future__ import annotations
@@ -106,6 +107,12 @@ def main() -> int:
         default=100.0,
         help="recording rate = the nets' step rate (edge record's default)",
     )
+    parser.add_argument(
+        "--model",
+        choices=["lstm-narmax", "hammerstein"],
+        default="lstm-narmax",
+        help="the bundle's forward model (train --model); the inverse net is the same LSTM-NARMAX for both",
+    )
     parser.add_argument("--epochs", type=int, default=150)
     parser.add_argument("--duration", type=float, default=20.0)
     parser.add_argument("--keep", metavar="DIR", help="work here and keep the files (default: a temporary dir)")
@@ -127,7 +134,7 @@ def run(work: Path, args: argparse.Namespace) -> int:
                      "--sample-hz", f"{args.sample_hz:g}", "--out", str(recording), "--json")  # fmt: skip
     timings.append(("edge record (sines, 113 s simulated)", w, c))
     store, target = work / "store", work / "target"
-    out, w, c = pmactl("train", "--model", "lstm-narmax", "--train", str(recording), "--units", "bar,mm",
+    out, w, c = pmactl("train", "--model", args.model, "--train", str(recording), "--units", "bar,mm",
                        "--epochs", str(args.epochs), "--seed", str(args.seed), "--save", str(store),
                        "--key", str(work / "keys" / "pmactl.key"), "--json")  # fmt: skip
     trained = json.loads(out.strip().splitlines()[-1])["bundle"]
@@ -146,7 +153,10 @@ def run(work: Path, args: argparse.Namespace) -> int:
                 summary = json.loads(out.strip().splitlines()[-1])
                 rms[(mode, f)] = float(summary["rms_error"]) if summary["rms_error"] is not None else float("nan")
                 timings.append((f"edge run {mode} {f:g} Hz ({args.duration:g} s simulated)", w, c))
-    print(f"emulated muscle seed {args.seed}, recording at {args.sample_hz:g} Hz, {args.epochs} epochs")
+    print(
+        f"emulated muscle seed {args.seed}, recording at {args.sample_hz:g} Hz, {args.epochs} epochs, "
+        f"forward model {args.model}"
+    )
     print(
         f"inverse net, held-out commands: RMSE {trained['inverse_tail_rmse_bar']:.3f} bar "
         f"(table alone {trained['inverse_table_only_tail_rmse_bar']:.3f} bar)"
