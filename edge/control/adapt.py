@@ -72,7 +72,7 @@ class OutputMapEstimator:
         self.updates_ = 0
         self._p00, self._p01, self._p11 = self._p0[0], 0.0, self._p0[1]
         self._mean = math.nan
-        self._var = 0.0
+        self._var = self._weight = 0.0
 
     def predict(self, y_model: float) -> float:
         """The mapped model output ``a + b * y_model``."""
@@ -93,7 +93,9 @@ class OutputMapEstimator:
             delta = y_model - self._mean
             self._mean += alpha * delta
             self._var = (1.0 - alpha) * (self._var + alpha * delta * delta)
-        self.excited_ = self._var >= self.min_variance
+            self._weight += alpha * (1.0 - self._weight)
+        # divided by the weight collected so far: right from the first samples, not after a window
+        self.excited_ = self._var >= self.min_variance * self._weight
         if not self.excited_:
             return
         lam = self.forgetting
@@ -112,3 +114,18 @@ class OutputMapEstimator:
         self.offset_ = min(max(a, -self.offset_max), self.offset_max)
         self.gain_ = min(max(b, s.gain_min), s.gain_max)
         self.updates_ += 1
+
+
+def replay(
+    settings: AdaptSettings, dt_s: float, span: float, y_model: list[float], y_measured: list[float], start: int = 0
+) -> list[float]:
+    """Run the estimator over a recording as the edge runs it per tick: from sample ``start``,
+    the prediction for sample k is ``a + b * y_model[k]`` with the map learned from the samples
+    before k (one step ahead; nothing of sample k is in it). NaN before ``start``."""
+    estimator = OutputMapEstimator(settings, dt_s, span)
+    predicted = [math.nan] * len(y_model)
+    for k in range(start, len(y_model)):
+        model = y_model[k]
+        predicted[k] = estimator.offset_ + estimator.gain_ * model
+        estimator.update(model, y_measured[k])
+    return predicted
