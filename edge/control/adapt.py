@@ -95,7 +95,7 @@ class OutputMapEstimator:
             self._var = (1.0 - alpha) * (self._var + alpha * delta * delta)
             self._weight += alpha * (1.0 - self._weight)
         # divided by the weight collected so far: right from the first samples, not after a window
-        self.excited_ = self._var >= self.min_variance * self._weight
+        self.excited_ = self._weight > 0.0 and self._var >= self.min_variance * self._weight
         if not self.excited_:
             return
         lam = self.forgetting
