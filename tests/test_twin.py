@@ -52,7 +52,8 @@ def test_the_watch_ignores_a_fit_error_and_names_a_large_residual_early():
     assert all(watch.add(i * 0.01, float(r)) == TWIN_OK for i, r in enumerate(noise))
     verdicts = [watch.add(5.0 + i * 0.01, 6.0) for i in range(300)]
     assert verdicts.count(TWIN_WARN) == 1 and verdicts.index(TWIN_WARN) < 20  # 6 mm: 12 ticks of 100 suffice
-    assert watch.warning is not None and "6.00 mm" in watch.warning
+    assert watch.warning is not None and "bound 2.00 mm" in watch.warning
+    assert watch.warned_at_s == pytest.approx(5.0 + 0.01 * verdicts.index(TWIN_WARN))
 
 
 def test_the_watch_trips_past_the_fault_bound_and_skips_ticks_without_a_residual():

@@ -55,12 +55,13 @@ class TwinWatch:
     warning: str | None = None
     fault: str | None = None
     worst_rms_mm: float = 0.0  # the largest window RMS so far (the run's summary shows it)
+    warned_at_s: float | None = None  # the tick time [s] of the warning
     _sum_sq: float = 0.0
     _count: int = 0
     _end: float = math.nan
 
     def reset(self) -> None:
-        self.warning = self.fault = None
+        self.warning = self.fault = self.warned_at_s = None
         self.worst_rms_mm, self._sum_sq, self._count, self._end = 0.0, 0.0, 0, math.nan
 
     def add(self, t: float, residual_mm: float) -> int:
@@ -72,29 +73,29 @@ class TwinWatch:
             self._sum_sq += residual_mm * residual_mm
             self._count += 1
         if t < self._end:
-            # the window's RMS is already certain to pass a bound: do not wait for its end
-            floor_sq = self._sum_sq / (self.window_s / self.period_s)
-            if not (self.fault_mm > 0.0 and floor_sq > self.fault_mm**2) and not (
-                self.warning is None and self.warn_mm > 0.0 and floor_sq > self.warn_mm**2
+            # the window's RMS counting its remaining ticks as zero: past a bound already, do not wait
+            rms = math.sqrt(self._sum_sq / (self.window_s / self.period_s))
+            if not (self.fault_mm > 0.0 and rms > self.fault_mm) and not (
+                self.warning is None and self.warn_mm > 0.0 and rms > self.warn_mm
             ):
                 return TWIN_OK
-            rms = math.sqrt(self._sum_sq / self._count)
         else:
             rms = math.sqrt(self._sum_sq / self._count) if self._count else 0.0
             self._sum_sq, self._count, self._end = 0.0, 0, t + self.window_s
-        if rms > self.worst_rms_mm:
-            self.worst_rms_mm = rms
+            if rms > self.worst_rms_mm:
+                self.worst_rms_mm = rms
         if self.fault_mm > 0.0 and rms > self.fault_mm:
             self.fault = (
-                f"the forward twin's residual RMS was {rms:.2f} mm over {self.window_s:g} s "
+                f"the forward twin's residual RMS over {self.window_s:g} s reached {rms:.2f} mm "
                 f"> twin_mismatch_mm {self.fault_mm:g} mm: {CAUSES}"
             )
             return TWIN_FAULT
         if self.warning is None and self.warn_mm > 0.0 and rms > self.warn_mm:
             self.warning = (
-                f"the forward twin's residual RMS was {rms:.2f} mm over {self.window_s:g} s "
+                f"the forward twin's residual RMS over {self.window_s:g} s reached {rms:.2f} mm "
                 f"(bound {self.warn_mm:.2f} mm): {CAUSES}"
             )
+            self.warned_at_s = t
             return TWIN_WARN
         return TWIN_OK
 

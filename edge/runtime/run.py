@@ -332,6 +332,7 @@ class EdgeRuntime:
         record: dict[str, object] = {}
         if watch is not None:
             record["twin_rms_max_mm"] = watch.worst_rms_mm
+            record["twin_warning_t"] = watch.warned_at_s
         if adapt is not None:
             record["adapt"] = {"offset_mm": adapt.offset_, "gain": adapt.gain_, "updates": adapt.updates_}
         return record
