@@ -98,6 +98,8 @@ class EdgeRuntime:
         reference: desired contraction [mm] over time.
         feedforward: False runs PID alone (the comparison of Ai2019 Table 5).
         use_correction: False ignores the bundle's ONNX correction.
+        twin: False runs without the forward twin (and so without ``[adapt]``): the table-only
+            tick, for comparison.
         telemetry_path: where to write telemetry (None: none); ``{time}`` in it becomes the
             start time (UTC), so a service writes a new file per run.
         settle_s: ticks before this time [s] are not scored in the error summary.
@@ -119,6 +121,7 @@ class EdgeRuntime:
         *,
         feedforward: bool = True,
         use_correction: bool = True,
+        twin: bool = True,
         telemetry_path: str | Path | None = None,
         settle_s: float = 0.0,
         profile: bool | str = False,
@@ -149,13 +152,13 @@ class EdgeRuntime:
             self.controller = JointController(reference, gains, j, inverse, limits, j.feedback == "through_model")
         else:
             gains = PIDGains(c.kp_bar_per_mm, c.ki_bar_per_mm_s, c.kd_bar_s_per_mm, c.derivative_filter_s)
-            twin = bundle.forward if bundle is not None else None  # the forward twin watches the muscle
+            forward = bundle.forward if twin and bundle is not None else None  # the forward twin watches the muscle
             adapt = (
                 OutputMapEstimator(config.adapt, config.period_s, output_span(bundle))
-                if config.adapt.enabled and bundle is not None and inverse is not None
+                if config.adapt.enabled and forward is not None and bundle is not None and inverse is not None
                 else None
             )
-            self.controller = Controller(reference, gains, inverse, limits, correction, twin, adapt)
+            self.controller = Controller(reference, gains, inverse, limits, correction, forward, adapt)
         self.layout = frame_layout(config.rig)
         self.frame = self.layout.new()
         channel_limits = tuple(
