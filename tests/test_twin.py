@@ -18,6 +18,9 @@ from edge.errors import ConfigError
 from edge.runtime.bundle import load_bundle
 from edge.runtime.safety import Fault
 from edge.runtime.telemetry_read import read_telemetry
+from host.data import load_measurement
+from host.examples import example_path
+from host.workflow import make_estimator, save_bundle
 from tests.edge_helpers import fit_bundle, rig_config, runtime
 
 IN_REACH = "sine:amplitude=20,frequency=0.2,offset=30"  # 10..50 mm: inside the example bundle's reach
@@ -89,6 +92,17 @@ def test_a_leak_and_a_detached_sensor_are_warned_about(bundle, tmp_path, fault, 
     summary, record = hil_run(bundle, tmp_path, f"{fault}@6", duration_s=12.0)
     times = twin_warnings(record)
     assert len(times) == 1 and 6.0 < times[0] <= 6.0 + within_s, times
+
+
+def test_a_bundle_of_a_muscle_that_needs_more_pressure_is_warned_about(tmp_path):
+    """Fitted on the example recording with its pressure scaled by 1.4 (another muscle)."""
+    train = load_measurement(example_path("train"))
+    estimator = make_estimator("preisach").fit(1.4 * train.u, train.y)
+    other = save_bundle(estimator, train, tmp_path / "other", ("bar", "mm"), {"model": "preisach"})
+    summary, record = hil_run(other, tmp_path, duration_s=12.0)
+    times = twin_warnings(record)
+    assert len(times) == 1 and times[0] <= 3.0 + 2.0 + 0.2, times  # grace + one window + one report period
+    assert summary["twin_warning_t"] <= 5.0
 
 
 def test_with_twin_mismatch_mm_a_leak_is_a_fault(bundle, tmp_path):
