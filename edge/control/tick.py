@@ -151,14 +151,12 @@ class Controller:
         if twin is not None:
             model_mm = twin.step(p if p == p else self._last_bar)  # the pressure applied (or commanded)
             inside = not getattr(twin, "saturated", False)  # a table clamped to its range extrapolates
+            # the residual judges the bundle itself: a leak the adaptation absorbs is still seen
+            frame.twin_mm, frame.twin_residual_mm = model_mm, y - model_mm if inside else math.nan
             if adapt is not None:
-                predicted = adapt.offset_ + adapt.gain_ * model_mm  # the map before this tick's update
                 if inside:
                     adapt.update(model_mm, y)
                 frame.adapt_offset_mm, frame.adapt_gain = adapt.offset_, adapt.gain_
-            else:
-                predicted = model_mm
-            frame.twin_mm, frame.twin_residual_mm = predicted, y - predicted if inside else math.nan
         if self.inverse is None:
             feedforward = 0.0
         elif adapt is not None:
