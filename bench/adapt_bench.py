@@ -86,6 +86,14 @@ def twin_table(example: Path, other: Path, long_s: float) -> None:
         ("matching bundle, 0.5 Hz sine", example, config(), FAST_SINE, long_s, None),
         ("bundle of another plant (7.5 kg)", other, config(), SINE, 40.0, 0.0),
         ("leak (muscle keeps 80 %)", example, config(f"&faults=leak@{ONSET_S:g}"), SINE, 40.0, ONSET_S),
+        (
+            "leak, with [adapt] on",
+            example,
+            config(f"&faults=leak@{ONSET_S:g}", adapt={"enabled": True}),
+            SINE,
+            40.0,
+            ONSET_S,
+        ),
         ("position sensor detached", example, config(f"&faults=sensor_detached@{ONSET_S:g}"), SINE, 40.0, ONSET_S),
     ]
     for name, bundle, cfg, reference, duration, onset in cases:
