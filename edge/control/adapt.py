@@ -19,7 +19,7 @@ Safeguards (all in :class:`AdaptSettings`, one place):
   updated only while the standard deviation of ``y_model`` over the last
   ``excitation_window_s`` (exponentially weighted) is at least ``excitation_share * span``:
   with a resting input the offset and the gain cannot be told apart;
-* **reset on arming** to ``a = 0, b = 1``.
+* **reset on arming** to ``a = 0, b = 1``; the covariance never grows past its initial value.
 
 Plain Python floats, no numpy: the edge runs it per tick, and ``pmactl fit --adapt`` replays
 this same code over recordings.
@@ -107,9 +107,10 @@ class OutputMapEstimator:
         error = y_measured - (self.offset_ + self.gain_ * y_model)
         a = self.offset_ + k0 * error
         b = self.gain_ + k1 * error
-        self._p00 = (p00 - k0 * g0) / lam
-        self._p01 = (p01 - k0 * g1) / lam
-        self._p11 = (p11 - k1 * g1) / lam
+        p00, p01, p11 = (p00 - k0 * g0) / lam, (p01 - k0 * g1) / lam, (p11 - k1 * g1) / lam
+        # never more uncertain than at the start (forgetting on a weakly exciting input winds P up)
+        scale = min(1.0, self._p0[0] / p00 if p00 > 0.0 else 1.0, self._p0[1] / p11 if p11 > 0.0 else 1.0)
+        self._p00, self._p01, self._p11 = p00 * scale, p01 * scale, p11 * scale
         s = self.settings
         self.offset_ = min(max(a, -self.offset_max), self.offset_max)
         self.gain_ = min(max(b, s.gain_min), s.gain_max)
