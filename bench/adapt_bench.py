@@ -5,7 +5,8 @@ Usage: nice -n 10 python bench/adapt_bench.py [--quick]
 1. **Twin watch**: the example bundle (``pmactl fit --model preisach`` on the shipped
    ``pma_triangles.csv``) runs a 10-50 mm sine at 0.2 Hz with the default ``[safety]`` twin
    settings (warning when the residual's RMS over 2 s passes 6 % of the bundle's span). The
-   matching muscle runs long, on two references, to count false warnings; a bundle fitted to
+   matching muscle runs long, on two references, then on a hold, a 1 Hz ramp-sine, a
+   rate-dependent muscle and the session-shifted one of table 2, to count false warnings; a bundle fitted to
    another plant (the same muscle with 7.5 kg instead of 3.5 kg), a leak and a position sensor
    that slips off the muscle (``hil.faults``, from t = 20 s) must be warned about: the table
    gives the seconds from the onset to the warning.
@@ -38,6 +39,7 @@ from host.workflow import make_estimator, save_bundle
 
 SINE = "sine:amplitude=20,frequency=0.2,offset=30"
 FAST_SINE = "sine:amplitude=20,frequency=0.5,offset=30"
+RAMP_SINE = "ramp-sine:peak=20,frequency=1,offset=30,rise=20,hold=10"
 ONSET_S = 20.0
 GAINS = {
     "feedforward alone": {"kp_bar_per_mm": 0.0, "ki_bar_per_mm_s": 0.0},
@@ -84,6 +86,10 @@ def twin_table(example: Path, other: Path, long_s: float) -> None:
     cases = [
         ("matching bundle, 0.2 Hz sine", example, config(), SINE, long_s, None),
         ("matching bundle, 0.5 Hz sine", example, config(), FAST_SINE, long_s, None),
+        ("matching bundle, hold at 30 mm", example, config(), "const:value=30", 60.0, None),
+        ("matching bundle, 1 Hz ramp-sine", example, config(), RAMP_SINE, 50.0, None),
+        ("matching bundle, rate-dependent muscle", example, config("&effect=rate_dependence"), SINE, 60.0, None),
+        ("matching bundle, session-shifted muscle", example, config("&effect=session_shift"), SINE, 60.0, None),
         ("bundle of another plant (7.5 kg)", other, config(), SINE, 40.0, 0.0),
         ("leak (muscle keeps 80 %)", example, config(f"&faults=leak@{ONSET_S:g}"), SINE, 40.0, ONSET_S),
         (
