@@ -41,8 +41,8 @@ from host.diagnose.runs import RunSet, node_differences, preisach_nodes, run_set
 OFFSET = "session_drift"
 # input (pressure transducer) zero shifts whose first-order directions form the input_drift group,
 # as shares of the training input range
-INPUT_SHIFTS = (-0.05, 0.05)
-# a test run must hold this many output lags of the identified model (the model's memory) three times over
+INPUT_SHIFTS = (-0.15, -0.05, 0.05, 0.15)
+# a test run must last this many of the model's slowest time constants (its memory)
 MEMORY_LAGS = 3.0
 MIN_RUN_SAMPLES = 10
 # v3 causes that are not a difference between sessions (module docstring, step 3)
@@ -165,15 +165,17 @@ def _on_training_range(rs: RunSet, train: NDArray[np.bool_], shift: float = 0.0)
     return replace(rs, u=u)
 
 
-def _refuse_short_tests(test: RunSet, lag_s: float) -> None:
-    memory = int(np.ceil(MEMORY_LAGS * lag_s / test.dt))
-    need = max(MIN_RUN_SAMPLES, 2 * memory)
+def _refuse_short_tests(test: RunSet, lag_s: float, rules: Rules) -> None:
+    """A test run must outlast the model's memory: :data:`MEMORY_LAGS` times its slowest filter
+    (the output lag or the longest nuisance lag), which each run starts settled at its first sample."""
+    slowest = max((lag_s, *rules.nuisance_lags_s))
+    need = max(MIN_RUN_SAMPLES, int(np.ceil(MEMORY_LAGS * slowest / test.dt)))
     for (a, b), name in zip(test.bounds(), test.names):
         if b - a < need:
             raise DataError(
-                f"{name}: test run of {b - a} samples is shorter than the model's memory needs ({need} samples: "
-                f"{MEMORY_LAGS:g} output lags of {lag_s:g} s at {1 / test.dt:.3g} Hz, twice over); record a longer "
-                "run or leave it out of --test"
+                f"{name}: test run of {b - a} samples is shorter than the model's memory ({need} samples: "
+                f"{MEMORY_LAGS:g} x its slowest lag of {slowest:g} s at {1 / test.dt:.3g} Hz); record a longer run "
+                "or leave it out of --test"
             )
 
 
@@ -209,7 +211,7 @@ def cross_runs(
     ).lag_s
     model = _identified(rs, nodes, train, lag, rules)
     test = _subset(rs, ~train)
-    _refuse_short_tests(test, lag)
+    _refuse_short_tests(test, lag, rules)
     yhat = model.prediction[~train]
     residual = replace(test, y=test.y - yhat)
     groups = _correction_groups(rs, train, test, model, lag, rules)

@@ -1,0 +1,195 @@
+"""The decoy column: how often diagnosis v2 and v3 blame a temperature that has nothing to do with
+the muscle.
+
+Usage: python bench/diagnose_decoy.py [--seeds N] [--sources hil,real] [--methods v2,v3]
+
+A decoy ``temperature`` column is added to records whose physics it does not touch:
+
+* ``hil``: effect-free HIL recordings (the mixed protocol, 60 s at 100 Hz, one per seed; they exist
+  without ../shared/data);
+* ``real``: the two untouched real muscle campaigns of ../shared/data (18-03 and 31-03, every run
+  of one date diagnosed together; skipped when the folder is absent).
+
+Shapes (the column wanders over the campaign clock, continuous across runs, 20-30 degC):
+
+* ``walk``: a Gaussian random walk;
+* ``smooth_walk``: a random walk low-passed with a time constant of a tenth of the record;
+* ``sine``: a slow sine of 0.5-2 periods per record, random phase;
+* ``ramp_sine``: a linear warm-up plus a slow sine (the room heats while it oscillates).
+
+Each (source, shape, seed) is diagnosed with v3 (``diagnose_runs``) and v2 (``diagnose``, one
+record: a campaign's runs laid end to end); a false alarm is a verdict of ``temperature_drift``.
+The table prints the count per source, shape and method, the wall and CPU time. Target (issue 33):
+at most 1 in 10.
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import os
+import resource
+import sys
+import time
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from hil.record import record
+from host.data import Measurement, load_measurement
+
+# ../shared/data beside the checkout, or $PMACTL_SHARED_DATA (as the tests find it)
+DATA = Path(os.environ.get("PMACTL_SHARED_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
+DATA = DATA / "pam_muscle_sensory"
+CAMPAIGNS = ("18-03-2026_Length_Characterisation", "31-03-2026_Length_Characterisation")
+COLUMN = "temperature"
+FALSE_ALARM = "temperature_drift"
+
+
+def walk(clock: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
+    return np.cumsum(rng.normal(size=clock.size))
+
+
+def smooth_walk(clock: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
+    steps = rng.normal(size=clock.size)
+    a = 1.0 / max(1.0, clock.size / 10)
+    out = np.empty_like(steps)
+    level = 0.0
+    for i, s in enumerate(np.cumsum(steps)):
+        level += a * (s - level)
+        out[i] = level
+    return out
+
+
+def sine(clock: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
+    periods = rng.uniform(0.5, 2.0)
+    span = float(clock[-1] - clock[0]) or 1.0
+    return np.sin(2 * np.pi * periods * (clock - clock[0]) / span + rng.uniform(0, 2 * np.pi))
+
+
+def ramp_sine(clock: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
+    span = float(clock[-1] - clock[0]) or 1.0
+    return (clock - clock[0]) / span + 0.4 * sine(clock, rng)
+
+
+SHAPES: dict[str, Callable[[NDArray[np.float64], np.random.Generator], NDArray[np.float64]]] = {
+    "walk": walk,
+    "smooth_walk": smooth_walk,
+    "sine": sine,
+    "ramp_sine": ramp_sine,
+}
+
+
+def to_degc(raw: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``raw`` scaled to wander between 20 and 30 degC."""
+    spread = float(np.ptp(raw)) or 1.0
+    return 20.0 + 10.0 * (raw - raw.min()) / spread
+
+
+def with_decoy(runs: list[Measurement], shape: str, seed: int) -> list[Measurement]:
+    """``runs`` with a decoy temperature over their campaign clock (runs laid end to end)."""
+    lengths = [len(m) for m in runs]
+    clock = np.arange(sum(lengths), dtype=float)  # samples of the campaign, runs laid end to end
+    column = to_degc(SHAPES[shape](clock, np.random.default_rng(seed)))
+    out, start = [], 0
+    for m, n in zip(runs, lengths):
+        extras = {k: v for k, v in m.extras.items() if k != COLUMN}
+        extras[COLUMN] = column[start : start + n]
+        out.append(Measurement(m.t, m.u, m.y, extras, m.source, list(m.notes), dict(m.units)))
+        start += n
+    return out
+
+
+def end_to_end(runs: list[Measurement]) -> Measurement:
+    """The runs as one record (v2 takes one): each run's time shifted to follow the previous one."""
+    ts, offset = [], 0.0
+    for m in runs:
+        ts.append(m.t - m.t[0] + offset)
+        offset = float(ts[-1][-1]) + m.dt
+    extras = {k: np.concatenate([m.extras[k] for m in runs]) for k in runs[0].extras}
+    return Measurement(
+        np.concatenate(ts),
+        np.concatenate([m.u for m in runs]),
+        np.concatenate([m.y for m in runs]),
+        extras,
+        runs[0].source,
+    )
+
+
+def hil_sources(seeds: int) -> dict[str, list[Measurement]]:
+    out = {}
+    for seed in range(seeds):
+        rec = record("mixed", 100 + seed, 60.0, "none")
+        out[f"hil-{100 + seed}"] = [Measurement(rec.t, rec.u, rec.y, {}, f"hil mixed {100 + seed}")]
+    return out
+
+
+def real_sources() -> dict[str, list[Measurement]]:
+    out = {}
+    for campaign in CAMPAIGNS:
+        paths = sorted(glob.glob(str(DATA / campaign / "*.csv")))
+        if paths:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # irregular steps are resampled, with a warning per file
+                out[campaign[:5]] = [
+                    Measurement(m.t, m.u, m.y, {}, m.source, [], dict(m.units)) for m in map(load_measurement, paths)
+                ]
+    return out
+
+
+def verdict(method: str, runs: list[Measurement]) -> str:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if method == "v3":
+            from host.diagnose.v3 import diagnose_runs
+
+            return diagnose_runs(runs).cause
+        from host.diagnose.run import diagnose
+
+        return diagnose(end_to_end(runs), progress=False).cause
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seeds", type=int, default=5, help="decoy seeds per (source, shape) (default 5)")
+    parser.add_argument("--hil-records", type=int, default=2, help="effect-free HIL recordings (default 2)")
+    parser.add_argument("--sources", default="hil,real", help="hil, real or both (default)")
+    parser.add_argument("--methods", default="v2,v3", help="v2, v3 or both (default)")
+    args = parser.parse_args(argv)
+    sources: dict[str, list[Measurement]] = {}
+    if "hil" in args.sources:
+        sources.update(hil_sources(args.hil_records))
+    if "real" in args.sources:
+        real = real_sources()
+        if not real:
+            print(f"(no real campaigns under {DATA}: real rows skipped)", file=sys.stderr)
+        sources.update(real)
+    methods = args.methods.split(",")
+    wall, cpu = time.perf_counter(), time.process_time()
+    print(f"{'source':<10} {'shape':<12} {'method':<6} {'named temperature':>18}  verdicts")
+    totals = {m: [0, 0] for m in methods}
+    for name, runs in sources.items():
+        for shape in SHAPES:
+            for method in methods:
+                causes = [verdict(method, with_decoy(runs, shape, seed)) for seed in range(args.seeds)]
+                hits = sum(c == FALSE_ALARM for c in causes)
+                totals[method][0] += hits
+                totals[method][1] += len(causes)
+                print(
+                    f"{name:<10} {shape:<12} {method:<6} {hits:>12}/{len(causes):<5}  {', '.join(causes)}", flush=True
+                )
+    for method, (hits, n) in totals.items():
+        print(f"total {method}: {hits}/{n} name the decoy ({hits / max(n, 1):.0%}; target <= 10 %)")
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    print(
+        f"time: {time.perf_counter() - wall:.0f} s wall, {time.process_time() - cpu:.0f} s CPU, "
+        f"peak {usage.ru_maxrss / 1024:.0f} MB"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
