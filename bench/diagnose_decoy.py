@@ -25,6 +25,14 @@ on the campaign laid end to end as one record, as a user with one file would giv
 ``temperature_drift``.
 The table prints the count per source, shape and method, the wall and CPU time. Target (issue 33):
 at most 1 in 10.
+
+``--surrogates reflected`` runs v3 with the column surrogates proposed for
+``host.diagnose.conditional.column_copies`` (:func:`reflected_copies`, swapped in here only; that
+module belongs to the v3 statistics): circular shifts of the column *reflected at its ends*, so a
+smooth column's copies are as smooth as it is (a plain circular shift of a ramp or a slow sine
+puts a jump at the wrap, which no smooth misfit in time correlates with, so the real column beats
+its copies). ``--inject SHARE``: the temperature is made real, ``y`` gets ``SHARE`` x its p-p x
+the scaled column (the power check: a real temperature effect must still be named).
 """
 
 from __future__ import annotations
@@ -44,6 +52,7 @@ from numpy.typing import NDArray
 
 from hil.record import record
 from host.data import Measurement, load_measurement
+from host.diagnose.conditional import column_copies as CURRENT_COPIES
 
 # ../shared/data beside the checkout, or $PMACTL_SHARED_DATA (as the tests find it)
 DATA = Path(os.environ.get("PMACTL_SHARED_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
@@ -55,7 +64,6 @@ CAMPAIGNS = (
     "2026-07-22_Literature_Comparison",
 )
 COLUMN = "temperature"
-FALSE_ALARM = "temperature_drift"
 
 
 def walk(clock: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
@@ -92,22 +100,44 @@ SHAPES: dict[str, Callable[[NDArray[np.float64], np.random.Generator], NDArray[n
 }
 
 
+def reflected_copies(
+    rs: object, values: NDArray[np.float64], count: int, rng: np.random.Generator
+) -> tuple[list[NDArray[np.float64]], str]:
+    """Surrogates of a column (the proposal for ``column_copies``): per-run values permuted across
+    runs when constant within every run and >= 4 runs (as now); otherwise windows of the series
+    followed by its mirror image (periodic, continuous at every join), starting 10-90 % of the
+    way around, so each copy keeps the column's smoothness and spectrum with no jump."""
+    copies, kind = CURRENT_COPIES(rs, values, count, rng)  # type: ignore[arg-type]
+    if kind.startswith("its per-run values"):
+        return copies, kind
+    n = values.size
+    loop = np.concatenate([values, values[::-1]])
+    out = []
+    for _ in range(count):
+        start = int(rng.integers(int(0.1 * 2 * n), int(0.9 * 2 * n)))
+        out.append(np.take(loop, np.arange(start, start + n), mode="wrap"))
+    return out, "reflected circular shifts (smooth as the column)"
+
+
 def to_degc(raw: NDArray[np.float64]) -> NDArray[np.float64]:
     """``raw`` scaled to wander between 20 and 30 degC."""
     spread = float(np.ptp(raw)) or 1.0
     return 20.0 + 10.0 * (raw - raw.min()) / spread
 
 
-def with_decoy(runs: list[Measurement], shape: str, seed: int) -> list[Measurement]:
-    """``runs`` with a decoy temperature over their campaign clock (runs laid end to end)."""
+def with_decoy(runs: list[Measurement], shape: str, seed: int, inject: float = 0.0) -> list[Measurement]:
+    """``runs`` with a decoy temperature over their campaign clock (runs laid end to end); with
+    ``inject`` > 0 it is no decoy: y moves by ``inject`` x its p-p per unit of the scaled column."""
     lengths = [len(m) for m in runs]
     clock = np.arange(sum(lengths), dtype=float)  # samples of the campaign, runs laid end to end
     column = to_degc(SHAPES[shape](clock, np.random.default_rng(seed)))
+    span = float(np.ptp(np.concatenate([m.y for m in runs])))
     out, start = [], 0
     for m, n in zip(runs, lengths):
         extras = {k: v for k, v in m.extras.items() if k != COLUMN}
         extras[COLUMN] = column[start : start + n]
-        out.append(Measurement(m.t, m.u, m.y, extras, m.source, list(m.notes), dict(m.units)))
+        y = m.y + inject * span * (extras[COLUMN] - 25.0) / 10.0
+        out.append(Measurement(m.t, m.u, y, extras, m.source, list(m.notes), dict(m.units)))
         start += n
     return out
 
@@ -128,10 +158,11 @@ def end_to_end(runs: list[Measurement]) -> Measurement:
     )
 
 
-def hil_sources(seeds: int) -> dict[str, list[Measurement]]:
+def hil_sources(seeds: int, duration_s: float = 60.0) -> dict[str, list[Measurement]]:
+    """``seeds`` effect-free HIL recordings of the mixed protocol, ``duration_s`` each at 100 Hz."""
     out = {}
     for seed in range(seeds):
-        rec = record("mixed", 100 + seed, 60.0, "none")
+        rec = record("mixed", 100 + seed, duration_s, "none")
         out[f"hil-{100 + seed}"] = [Measurement(rec.t, rec.u, rec.y, {}, f"hil mixed {100 + seed}")]
     return out
 
@@ -167,6 +198,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--hil-records", type=int, default=2, help="effect-free HIL recordings (default 2)")
     parser.add_argument("--sources", default="hil,real", help="hil, real or both (default)")
     parser.add_argument("--methods", default="v2,v3,v3-1", help="v2, v3, v3-1 (default: all three)")
+    parser.add_argument("--shapes", default=",".join(SHAPES), help="decoy shapes (default: all)")
+    parser.add_argument("--surrogates", choices=("current", "reflected"), default="current")
+    parser.add_argument("--inject", type=float, default=0.0, help="a real temperature effect (share of y's p-p)")
     args = parser.parse_args(argv)
     sources: dict[str, list[Measurement]] = {}
     if "hil" in args.sources:
@@ -177,23 +211,30 @@ def main(argv: list[str] | None = None) -> int:
             print(f"(no real campaigns under {DATA}: real rows skipped)", file=sys.stderr)
         sources.update(real)
     methods = args.methods.split(",")
+    if args.surrogates == "reflected":
+        import host.diagnose.conditional as conditional
+
+        conditional.column_copies = reflected_copies  # type: ignore[assignment]
+    target = "temperature_drift"
+    print(f"surrogates: {args.surrogates}; {'inject ' + str(args.inject) if args.inject else 'decoys'}")
     wall, cpu = time.perf_counter(), time.process_time()
     print(f"{'source':<10} {'shape':<12} {'method':<6} {'named temperature':>18}  verdicts")
     totals = {m: [0, 0] for m in methods}
     for name, runs in sources.items():
-        for shape in SHAPES:
+        for shape in args.shapes.split(","):
             for method in methods:
                 if method == "v3-1" and len(runs) == 1:
                     continue
-                causes = [verdict(method, with_decoy(runs, shape, seed)) for seed in range(args.seeds)]
-                hits = sum(c == FALSE_ALARM for c in causes)
+                causes = [verdict(method, with_decoy(runs, shape, seed, args.inject)) for seed in range(args.seeds)]
+                hits = sum(c == target for c in causes)
                 totals[method][0] += hits
                 totals[method][1] += len(causes)
                 print(
                     f"{name:<10} {shape:<12} {method:<6} {hits:>12}/{len(causes):<5}  {', '.join(causes)}", flush=True
                 )
     for method, (hits, n) in totals.items():
-        print(f"total {method}: {hits}/{n} name the decoy ({hits / max(n, 1):.0%}; target <= 10 %)")
+        what = "name the real temperature effect" if args.inject else "name the decoy (target <= 10 %)"
+        print(f"total {method}: {hits}/{n} {what} ({hits / max(n, 1):.0%})")
     usage = resource.getrusage(resource.RUSAGE_SELF)
     print(
         f"time: {time.perf_counter() - wall:.0f} s wall, {time.process_time() - cpu:.0f} s CPU, "

@@ -142,3 +142,12 @@ def test_the_second_muscle_campaign_differs_from_the_first(shared_data):
     assert result.cause in ("session_drift", "input_drift", "gain_change"), result.reason
     assert result.corrections[result.cause].interval[0] > 0
     assert len(result.per_run) == 38
+
+
+def test_one_short_training_run_is_judged_by_the_runs_method_instead_of_refused(tmp_path, train, capsys):
+    (a,) = write_runs(train[:1], tmp_path / "day1")  # 200 samples: too short for v2's cross-run
+    tests = write_runs(short_runs(2, count=3, dy=3.0), tmp_path / "day2")
+    assert main(["diagnose", "--train", str(a), "--test", str(tmp_path / "day2" / "*.csv")]) == 0
+    printed = capsys.readouterr().out
+    assert "run00.csv -> 3 runs (run00.csv ...): cause" in printed
+    assert all(f"{p.name} " in printed for p in tests)

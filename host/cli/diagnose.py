@@ -117,6 +117,18 @@ def _same_units(runs: list[Measurement], paths: list[str]) -> None:
             )
 
 
+# v2's cross-run needs this many samples per recording (host.diagnose.run.MIN_SAMPLES; not imported
+# here: the CLI imports the diagnosis lazily); shorter runs go to the runs method, whose folds adapt
+V2_MIN_SAMPLES = 400
+
+
+def _shortest(paths: list[str], args: argparse.Namespace) -> int:
+    """The fewest samples in any of ``paths`` (read quietly: the chosen method reads them again)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return min(len(read_measurement(path, args)) for path in paths)
+
+
 def run(args: argparse.Namespace) -> int:
     args.data = _paths(list(args.data), "run")
     args.test = _paths(list(args.test), "--test")
@@ -136,7 +148,8 @@ def run(args: argparse.Namespace) -> int:
             raise DataError(
                 "--stability checks one recording (pmactl diagnose DATA.csv --stability), not --train/--test"
             )
-        if len(args.train) > 1 or args.method == "v3":
+        short = args.method is None and _shortest(args.train + args.test, args) < V2_MIN_SAMPLES
+        if len(args.train) > 1 or args.method == "v3" or short:
             if args.method == "v2":
                 raise DataError(
                     f"--method v2 identifies on one training recording and --train matches {len(args.train)}; "
@@ -275,7 +288,8 @@ def _cross_runs(args: argparse.Namespace) -> int:
         interval = f"{h.interval[0]:+.1%} to {h.interval[1]:+.1%}"
         say(f"  {name:<18} {h.gain:>+7.1%} {interval:>17} {h.clark_west_p:>13.2g}")
     say(f"  held-out: {result.holdout}; each correction's level {result.level:.2g}")
-    say(f"  per test run, RMS error [{units}]: model as identified / + offset / + {result.cause} (held out)")
+    last = f"+ {result.cause}" if result.cause != "none" else "+ offset again (nothing named)"
+    say(f"  per test run, RMS error [{units}]: model as identified / + offset / {last} (held out)")
     for line in result.per_run:
         say(
             f"  {line.name:<24} {line.samples:>5} samples  {line.model_rmse:>8.3g} {line.offset_rmse:>8.3g} "

@@ -103,7 +103,7 @@ offset's own row: relative to the training model as it is).
 RMS error [{units}] of the training runs' model as it is, held out with an offset, and held out
 with the named correction.
 
-| run | samples | model | + offset | + {result.cause} |
+| run | samples | model | + offset | {"+ " + result.cause if result.cause != "none" else "nothing named"} |
 |---|---:|---:|---:|---:|
 {per_run}
 
