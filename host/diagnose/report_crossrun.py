@@ -74,7 +74,7 @@ def write_report_crossrun(result: CrossRunsResult, directory: str | Path, units:
     verdict = "nothing the tests can show" if result.cause == "none" else f"`{result.cause}`"
     text = f"""# What the model of the training runs gets wrong on the test runs
 
-**Verdict: {verdict}.** {result.reason[0].upper() + result.reason[1:]}.
+**Verdict: {verdict}.** {_meaning(result, units)}
 
 - Training runs ({len(result.train_names)}): {train}. The model (Preisach hysteresis, an output lag of
   {number(result.lag_s)} s, its tangents and a static output map) fits them with an RMS error of
@@ -107,12 +107,41 @@ with the named correction.
 |---|---:|---:|---:|---:|
 {per_run}
 
+## The method's reason
+
+{result.reason}.
+
 ## Notes
 
 {notes}"""
     path = out / "report.md"
     path.write_text(text)
     return path
+
+
+def _meaning(result: CrossRunsResult, units: str) -> str:
+    """The verdict in one paragraph a lab user reads, with the errors in the output's units."""
+    offset = result.corrections[OFFSET]
+    alone = (
+        f"an offset alone takes it from {number(offset.base_rmse)} to {number(offset.ext_rmse)} {units} "
+        f"({offset.gain:.0%})"
+    )
+    if result.cause == "none":
+        return (
+            "The training runs' model predicts the test runs as well as any correction tried: none improves the "
+            f"error on held-out test runs reliably ({alone}). Nothing measurable changed between the sessions."
+        )
+    h = result.corrections[result.cause]
+    if result.cause == OFFSET:
+        return (
+            f"The test runs differ from the training runs by {MEANING[OFFSET]}: {alone}, with a 90 % interval of "
+            f"{h.interval[0]:.0%} to {h.interval[1]:.0%}; no richer correction adds to it."
+        )
+    return (
+        f"The test runs differ from the training runs by {MEANING[result.cause]}. Correcting for it lowers the "
+        f"error on held-out test runs from {number(h.base_rmse)} to {number(h.ext_rmse)} {units} RMS beyond an "
+        f"offset ({h.gain:.0%} less; 90 % interval {h.interval[0]:.0%} to {h.interval[1]:.0%}); {alone}."
+    )
 
 
 def _listed(names: list[str], first: int = 6) -> str:
