@@ -31,7 +31,11 @@ at most 1 in 10.
 module belongs to the v3 statistics): circular shifts of the column *reflected at its ends*, so a
 smooth column's copies are as smooth as it is (a plain circular shift of a ramp or a slow sine
 puts a jump at the wrap, which no smooth misfit in time correlates with, so the real column beats
-its copies). ``--inject SHARE``: the temperature is made real, ``y`` gets ``SHARE`` x its p-p x
+its copies). ``--column-vs-drift`` (a second proposal, for ``host.diagnose.v3.diagnose_runs``): a column
+cause is confirmed held out against the baseline *plus smooth functions of the campaign clock*
+(the hat functions of the drift group), so a column is named only when it predicts held-out
+blocks better than a smooth trend in time does (:func:`held_out_beyond_drift`).
+``--inject SHARE``: the temperature is made real, ``y`` gets ``SHARE`` x its p-p x
 the scaled column (the power check: a real temperature effect must still be named).
 """
 
@@ -53,6 +57,10 @@ from numpy.typing import NDArray
 from hil.record import record
 from host.data import Measurement, load_measurement
 from host.diagnose.conditional import column_copies as CURRENT_COPIES
+from host.diagnose.heldout import HeldOut
+from host.diagnose.heldout import held_out as CURRENT_HELD_OUT
+from host.diagnose.rules import RULES
+from host.diagnose.runs import RunSet
 
 # ../shared/data beside the checkout, or $PMACTL_SHARED_DATA (as the tests find it)
 DATA = Path(os.environ.get("PMACTL_SHARED_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
@@ -117,6 +125,26 @@ def reflected_copies(
         start = int(rng.integers(int(0.1 * 2 * n), int(0.9 * 2 * n)))
         out.append(np.take(loop, np.arange(start, start + n), mode="wrap"))
     return out, "reflected circular shifts (smooth as the column)"
+
+
+def held_out_beyond_drift(
+    rs: RunSet,
+    nuisance: NDArray[np.float64],
+    smoothness: NDArray[np.float64],
+    group: NDArray[np.float64],
+    masks: list[NDArray[np.bool_]],
+    ridge: float,
+    rng: np.random.Generator,
+    column: NDArray[np.float64] | None = None,
+) -> HeldOut:
+    """``held_out`` with the drift group's hat functions of the clock added to the baseline when a
+    column cause is checked (the proposal ``--column-vs-drift``)."""
+    if column is not None:
+        knots = np.linspace(rs.clock[0], rs.clock[-1], RULES.drift_knots)
+        width = knots[1] - knots[0]
+        hats = np.column_stack([np.clip(1.0 - np.abs(rs.clock - k) / width, 0.0, None) for k in knots[1:]])
+        nuisance = np.hstack([nuisance, hats])
+    return CURRENT_HELD_OUT(rs, nuisance, smoothness, group, masks, ridge, rng, column)
 
 
 def to_degc(raw: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -200,6 +228,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--methods", default="v2,v3,v3-1", help="v2, v3, v3-1 (default: all three)")
     parser.add_argument("--shapes", default=",".join(SHAPES), help="decoy shapes (default: all)")
     parser.add_argument("--surrogates", choices=("current", "reflected"), default="current")
+    parser.add_argument("--column-vs-drift", action="store_true", help="the second proposal (module docstring)")
     parser.add_argument("--inject", type=float, default=0.0, help="a real temperature effect (share of y's p-p)")
     args = parser.parse_args(argv)
     sources: dict[str, list[Measurement]] = {}
@@ -215,8 +244,13 @@ def main(argv: list[str] | None = None) -> int:
         import host.diagnose.conditional as conditional
 
         conditional.column_copies = reflected_copies  # type: ignore[assignment]
+    if args.column_vs_drift:
+        import host.diagnose.v3 as v3
+
+        v3.held_out = held_out_beyond_drift  # type: ignore[assignment]
     target = "temperature_drift"
-    print(f"surrogates: {args.surrogates}; {'inject ' + str(args.inject) if args.inject else 'decoys'}")
+    injected = f"inject {args.inject}" if args.inject else "decoys"
+    print(f"column vs drift: {args.column_vs_drift}; surrogates: {args.surrogates}; {injected}")
     wall, cpu = time.perf_counter(), time.process_time()
     print(f"{'source':<10} {'shape':<12} {'method':<6} {'named temperature':>18}  verdicts")
     totals = {m: [0, 0] for m in methods}
