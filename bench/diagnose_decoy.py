@@ -226,6 +226,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--hil-records", type=int, default=2, help="effect-free HIL recordings (default 2)")
     parser.add_argument("--sources", default="hil,real", help="hil, real or both (default)")
     parser.add_argument("--methods", default="v2,v3,v3-1", help="v2, v3, v3-1 (default: all three)")
+    parser.add_argument("--only", default="", help="sources whose name contains this (e.g. 31-03)")
     parser.add_argument("--shapes", default=",".join(SHAPES), help="decoy shapes (default: all)")
     parser.add_argument("--surrogates", choices=("current", "reflected"), default="current")
     parser.add_argument("--column-vs-drift", action="store_true", help="the second proposal (module docstring)")
@@ -239,6 +240,7 @@ def main(argv: list[str] | None = None) -> int:
         if not real:
             print(f"(no real campaigns under {DATA}: real rows skipped)", file=sys.stderr)
         sources.update(real)
+    sources = {k: v for k, v in sources.items() if args.only in k}
     methods = args.methods.split(",")
     if args.surrogates == "reflected":
         import host.diagnose.conditional as conditional
