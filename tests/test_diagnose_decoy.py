@@ -43,7 +43,7 @@ def _campaign(root: Path, name: str) -> list[Measurement]:
         return [Measurement(m.t, m.u, m.y, {}, m.source) for m in map(load_measurement, paths)]
 
 
-@pytest.mark.parametrize("campaign", [CAMPAIGNS[0], CAMPAIGNS[2]])
+@pytest.mark.parametrize("campaign", [CAMPAIGNS[0], pytest.param(CAMPAIGNS[2], marks=pytest.mark.slow)])
 def test_an_untouched_muscle_campaign_of_runs_with_a_decoy_temperature_does_not_name_it(shared_data, campaign):
     runs = _campaign(shared_data, campaign)
     causes = [diagnose_runs(with_decoy(runs, shape, 1)).cause for shape in ("walk", "ramp_sine")]
@@ -52,11 +52,16 @@ def test_an_untouched_muscle_campaign_of_runs_with_a_decoy_temperature_does_not_
 
 @pytest.mark.xfail(
     strict=True,
-    reason="v3 names a smooth decoy on a campaign given as one file: the column's circularly shifted copies "
-    "jump at the wrap, the column does not (bench/diagnose_decoy.py --surrogates reflected; a change to "
-    "host/diagnose/conditional.column_copies, which belongs to the v3 statistics). Remove this mark with it.",
+    reason="v3 names a slow decoy (bench/diagnose_decoy.py: 4/6 on the 31-03 runs, 3/6 on 18-03 as one file): "
+    "the column's circularly shifted copies jump at the wrap, the column does not. The proposed fix, reflected "
+    "shifts in host/diagnose/conditional.column_copies (not this branch's file), is measured by "
+    "bench/diagnose_decoy.py --surrogates reflected. Remove this mark with that fix.",
 )
-def test_an_untouched_muscle_campaign_as_one_file_with_a_slow_decoy_temperature_does_not_name_it(shared_data):
-    runs = _campaign(shared_data, CAMPAIGNS[0])
-    causes = [diagnose_runs([end_to_end(with_decoy(runs, "ramp_sine", seed))]).cause for seed in (1,)]
-    assert "temperature_drift" not in causes, causes
+@pytest.mark.parametrize(
+    "campaign, one_file, shape, seed",
+    [(CAMPAIGNS[1], False, "sine", 0), (CAMPAIGNS[0], True, "ramp_sine", 1)],
+    ids=["31-03 runs", "18-03 one file"],
+)
+def test_a_slow_decoy_temperature_on_an_untouched_campaign_is_not_named(shared_data, campaign, one_file, shape, seed):
+    decoyed = with_decoy(_campaign(shared_data, campaign), shape, seed)
+    assert diagnose_runs([end_to_end(decoyed)] if one_file else decoyed).cause != "temperature_drift"
