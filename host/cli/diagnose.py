@@ -138,15 +138,16 @@ def run(args: argparse.Namespace) -> int:
             raise DataError(
                 "cross-run diagnosis takes --train A.csv and --test B.csv (each repeatable, globs), and no RUN.csv"
             )
-        both = sorted(set(map(str, map(Path, args.train))) & set(map(str, map(Path, args.test))))
+        if args.stability:
+            raise DataError(
+                "--stability checks one recording (pmactl diagnose DATA.csv --stability), not --train/--test"
+            )
+        trained = {Path(p).resolve() for p in args.train}
+        both = sorted(p for p in args.test if Path(p).resolve() in trained)
         if both:
             raise DataError(
                 f"{Path(both[0]).name} is given to both --train and --test; a run cannot check the model it trained. "
                 "Split the runs into two lists"
-            )
-        if args.stability:
-            raise DataError(
-                "--stability checks one recording (pmactl diagnose DATA.csv --stability), not --train/--test"
             )
         short = args.method is None and _shortest(args.train + args.test, args) < V2_MIN_SAMPLES
         if len(args.train) > 1 or args.method == "v3" or short:
