@@ -101,6 +101,8 @@ def test_bad_lists_are_refused_in_one_line(tmp_path, train, capsys):
         "both --train and --test": ["--train", str(tmp_path / "day1" / "*.csv"), "--test", str(day1[0])],
         "--method v2 identifies on one": ["--train", str(day1[0]), "--train", str(day1[1]), "--test", str(day2[0])]
         + ["--method", "v2"],
+        "writes no report; add --method v3": ["--train", str(day1[0]), "--test", str(day2[0]), "--report", "r"]
+        + ["--method", "v2"],
     }
     for expected, args in cases.items():
         assert main(["diagnose", *args]) == 2, expected

@@ -157,6 +157,11 @@ def run(args: argparse.Namespace) -> int:
                     "drop --method (several training runs are judged together) or name one --train file"
                 )
             return _cross_runs(args)
+        if args.report:
+            raise DataError(
+                "--report: the v2 cross-run (one training recording) writes no report; add --method v3 to judge the "
+                "test runs with the runs method, which does"
+            )
         args.train = args.train[0]
     if args.method == "v3" or len(args.data) > 1:
         if args.stability:
