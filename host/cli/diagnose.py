@@ -3,8 +3,10 @@
 ``pmactl diagnose DATA.csv``: one record, blocked held-out folds (method v2 by default).
 ``pmactl diagnose RUN1.csv RUN2.csv ...`` or a glob (``'runs/*.csv'``): several runs of one rig
 together, with the calibrated-test method v3 (``--method v3`` chooses it for one record too).
-``pmactl diagnose --train A.csv --test B.csv [--test C.csv]``: what a model identified on A gets
-wrong on B (``--test`` takes globs).
+``pmactl diagnose --train 'A*.csv' --test 'B*.csv'``: what a model identified on the training runs
+gets wrong on the test runs (both take globs and repeat). One training recording without ``--method
+v3`` keeps the v2 cross-run (one verdict per test recording); several training runs, or ``--method
+v3``, identify on every training run together and judge the test runs together, with a line per run.
 """
 
 from __future__ import annotations
@@ -34,9 +36,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="RUN.csv",
         help="measured data (t, u, y; optional load, temperature); several runs or globs are diagnosed together (v3)",
     )
-    diag.add_argument("--train", metavar="A.csv", help="cross-run: identify on this recording ...")
     diag.add_argument(
-        "--test", action="append", default=[], metavar="B.csv", help="... and check it here (repeatable, globs)"
+        "--train",
+        action="append",
+        default=[],
+        metavar="A.csv",
+        help="cross-run: identify on these runs together (repeatable, globs: --train 'day1/*.csv') ...",
+    )
+    diag.add_argument(
+        "--test", action="append", default=[], metavar="B.csv", help="... and check the model here (repeatable, globs)"
     )
     diag.add_argument(
         "--method",
@@ -79,24 +87,83 @@ def _write_json(target: str, payload: object) -> None:
     Path(target).write_text(text)
 
 
+def _paths(patterns: list[str], option: str) -> list[str]:
+    """``patterns`` expanded (globs sorted); a folder is refused with the pattern that named it."""
+    paths = []
+    for pattern in patterns:
+        for path in expand_runs([pattern], option):
+            if Path(path).is_dir():
+                raise DataError(
+                    f"{option} {pattern}: {path} is a folder, not a recording; name the files in it "
+                    f"('{Path(path) / '*.csv'}')"
+                )
+            paths.append(path)
+    return paths
+
+
+def _same_units(runs: list[Measurement], paths: list[str]) -> None:
+    """Refuse runs whose input or output units differ (one model cannot fit bar and psi at once)."""
+    for role in ("u", "y"):
+        seen: dict[str, str] = {}
+        for m, path in zip(runs, paths):
+            unit = m.units.get(role)
+            if unit is not None:
+                seen.setdefault(unit, path)
+        if len(seen) > 1:
+            (u1, p1), (u2, p2) = list(seen.items())[:2]
+            raise DataError(
+                f"mixed units of {role}: {Path(p1).name} is in {u1}, {Path(p2).name} in {u2}; convert the runs to one "
+                f"unit, or give it with --units (e.g. --units u=bar,y=mm) when the headers are wrong"
+            )
+
+
+# v2's cross-run needs this many samples per recording (host.diagnose.run.MIN_SAMPLES; not imported
+# here: the CLI imports the diagnosis lazily); shorter runs go to the runs method, whose folds adapt
+V2_MIN_SAMPLES = 400
+
+
+def _shortest(paths: list[str], args: argparse.Namespace) -> int:
+    """The fewest samples in any of ``paths`` (read quietly: the chosen method reads them again)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return min(len(read_measurement(path, args)) for path in paths)
+
+
 def run(args: argparse.Namespace) -> int:
-    args.data = expand_runs(list(args.data), "run")
-    args.test = expand_runs(list(args.test), "--test")
-    if args.train:
-        trains = expand_runs([args.train], "--train")
-        if len(trains) > 1:
+    args.data = _paths(list(args.data), "run")
+    args.test = _paths(list(args.test), "--test")
+    args.train = _paths(list(args.train), "--train")
+    if args.train or args.test:
+        if not (args.train and args.test) or args.data:
             raise DataError(
-                f"--train {args.train} matches {len(trains)} files; cross-run takes one training recording. To "
-                "diagnose several runs together (a load or a date that differs between runs is a column), name them "
-                "all: pmactl diagnose A*.csv B*.csv"
+                "cross-run diagnosis takes --train A.csv and --test B.csv (each repeatable, globs), and no RUN.csv"
             )
-        args.train = trains[0]
+        if args.stability:
+            raise DataError(
+                "--stability checks one recording (pmactl diagnose DATA.csv --stability), not --train/--test"
+            )
+        trained = {Path(p).resolve() for p in args.train}
+        both = sorted(p for p in args.test if Path(p).resolve() in trained)
+        if both:
+            raise DataError(
+                f"{Path(both[0]).name} is given to both --train and --test; a run cannot check the model it trained. "
+                "Split the runs into two lists"
+            )
+        short = args.method is None and _shortest(args.train + args.test, args) < V2_MIN_SAMPLES
+        if len(args.train) > 1 or args.method == "v3" or short:
+            if args.method == "v2":
+                raise DataError(
+                    f"--method v2 identifies on one training recording and --train matches {len(args.train)}; "
+                    "drop --method (several training runs are judged together) or name one --train file"
+                )
+            return _cross_runs(args)
+        if args.report:
+            raise DataError(
+                "--report: the v2 cross-run (one training recording) writes no report; add --method v3 to judge the "
+                "test runs with the runs method, which does"
+            )
+        args.train = args.train[0]
     if args.method == "v3" or len(args.data) > 1:
-        if args.train or args.test:
-            raise DataError(
-                "cross-run diagnosis (--train/--test) uses method v2 and one --train file; give runs to diagnose "
-                "together without --train/--test"
-            )
         if args.stability:
             raise DataError("--stability is a v2 check; v3 reports held-out folds and an interval instead")
         if args.method == "v2":
@@ -109,13 +176,7 @@ def run(args: argparse.Namespace) -> int:
     to_stdout = args.json == "-"
     progress = False if to_stdout else None
     say = (lambda *a: print(*a, file=sys.stderr)) if to_stdout else print
-    if args.train or args.test:
-        if not (args.train and args.test) or args.data:
-            raise DataError("cross-run diagnosis takes --train A.csv and at least one --test B.csv, and no DATA.csv")
-        if args.stability:
-            raise DataError(
-                "--stability checks one recording (pmactl diagnose DATA.csv --stability), not --train/--test"
-            )
+    if args.train:
         return _cross_run(args, say, progress)
     if not args.data:
         raise DataError("name a recording (pmactl diagnose DATA.csv) or use --train A.csv --test B.csv")
@@ -172,13 +233,7 @@ def _runs_v3(args: argparse.Namespace) -> int:
         raise DataError("--folds is a v2 setting; v3 chooses its folds from the data (blocks, or whole short runs)")
     to_stdout = args.json == "-"
     say = (lambda *a: print(*a, file=sys.stderr)) if to_stdout else print
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        runs = [read_measurement(path, args) for path in args.data]
-    if caught:  # one line, not one per run
-        first = str(caught[0].message)
-        more = f" (and {len(caught) - 1} more like it)" if len(caught) > 1 else ""
-        print(f"pmactl: warning: {first}{more}", file=sys.stderr)
+    runs = _read_runs(args.data, args)
     # a progress line on stderr for anything that takes more than a few seconds (stdout stays clean)
     result = diagnose_runs(runs, progress=sum(len(m) for m in runs) > 10_000 or len(runs) > 10)
     title = Path(args.data[0]).name if len(runs) == 1 else f"{len(runs)} runs ({Path(args.data[0]).name} ...)"
@@ -202,6 +257,61 @@ def _runs_v3(args: argparse.Namespace) -> int:
 
     _write_results(args, say, result.as_json(), lambda: write_report_v3(result, args.report, title, _output_unit(runs)))
     return 0
+
+
+def _read_runs(paths: list[str], args: argparse.Namespace) -> list[Measurement]:
+    """Every run of ``paths``, warnings folded into one line, units checked to agree."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        runs = [read_measurement(path, args) for path in paths]
+    if caught:  # one line, not one per run
+        first = str(caught[0].message)
+        more = f" (and {len(caught) - 1} more like it)" if len(caught) > 1 else ""
+        print(f"pmactl: warning: {first}{more}", file=sys.stderr)
+    _same_units(runs, paths)
+    return runs
+
+
+def _cross_runs(args: argparse.Namespace) -> int:
+    """Cross-run over lists: the model of every training run, judged on every test run."""
+    from host.diagnose.crossrun_runs import cross_runs
+
+    if args.folds is not None:
+        raise DataError(
+            "--folds is a v2 setting; with several training runs the folds are chosen from the data (whole test "
+            "runs when runs are short, else blocks)"
+        )
+    say = (lambda *a: print(*a, file=sys.stderr)) if args.json == "-" else print
+    train = _read_runs(args.train, args)
+    test = _read_runs(args.test, args)
+    _same_units(train + test, args.train + args.test)
+    units = _output_unit(train + test)
+    result = cross_runs(train, test)
+    say(f"{_runs_title(args.train)} -> {_runs_title(args.test)}: cause {result.cause}")
+    say(f"  {result.reason}")
+    say(f"  {'correction':<18} {'gain':>7} {'90 % interval':>17} {'Clark-West p':>13}")
+    for name, h in result.corrections.items():
+        interval = f"{h.interval[0]:+.1%} to {h.interval[1]:+.1%}"
+        say(f"  {name:<18} {h.gain:>+7.1%} {interval:>17} {h.clark_west_p:>13.2g}")
+    say(f"  held-out: {result.holdout}; each correction's level {result.level:.2g}")
+    last = f"+ {result.cause}" if result.cause != "none" else "+ offset again (nothing named)"
+    say(f"  per test run, RMS error [{units}]: model as identified / + offset / {last} (held out)")
+    for line in result.per_run:
+        say(
+            f"  {line.name:<24} {line.samples:>5} samples  {line.model_rmse:>8.3g} {line.offset_rmse:>8.3g} "
+            f"{line.corrected_rmse:>8.3g}"
+        )
+    say(f"  time: {result.seconds:.1f} s wall, {result.cpu_seconds:.1f} s CPU")
+    for note in result.notes:
+        say(f"  note: {note}")
+    from host.diagnose.report_crossrun import write_report_crossrun
+
+    _write_results(args, say, result.as_json(), lambda: write_report_crossrun(result, args.report, units))
+    return 0
+
+
+def _runs_title(paths: list[str]) -> str:
+    return Path(paths[0]).name if len(paths) == 1 else f"{len(paths)} runs ({Path(paths[0]).name} ...)"
 
 
 def _output_unit(runs: list[Measurement]) -> str:
