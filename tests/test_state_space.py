@@ -95,3 +95,18 @@ def test_a_record_too_short_is_refused_with_the_fix(record):
     u, y = record
     with pytest.raises(DataError, match="record longer"):
         train(u[:600], y[:600], settings=StateSpaceSettings(**{**TINY.__dict__, "window": 500}))
+
+
+def test_a_saved_model_reloads_to_the_same_free_run(record, tmp_path):
+    import json
+
+    from host.train.state_space import StateSpaceWeights, save_state_space
+
+    u, y = record
+    model = train(u, y, epochs=2)
+    folder = save_state_space(model, tmp_path / "ss", {"seed": 0})
+    saved = json.loads((folder / "model.json").read_text())["weights"]
+    weights = StateSpaceWeights(**{k: (np.array(v) if isinstance(v, list) else v) for k, v in saved.items()})
+    assert np.array_equal(simulate_numpy(weights, u[:400]), model.simulate(u[:400]))
+    onnx_run = simulate_onnx(folder / "step.onnx", u[:400], weights.state_order)
+    assert np.max(np.abs(onnx_run - model.simulate(u[:400]))) < 1e-4 * float(np.ptp(model.simulate(u[:400])))

@@ -373,3 +373,28 @@ def simulate_onnx(path: str | Path, u: NDArray[np.float64], nx: int) -> NDArray[
         y, x = session.run(None, {"u": np.array([[uk]], dtype=np.float32), "x": x})
         out[k] = float(y[0, 0])
     return out
+
+
+def save_state_space(model: NeuralStateSpace, directory: str | Path, record: dict[str, object]) -> Path:
+    """Write ``step.onnx``, ``model.json`` (weights, step contract, training record and curve) and
+    ``training_curve.png`` to ``directory`` (created; its parent must exist), as ``save_model`` does
+    for the other nets."""
+    import json
+
+    directory = Path(directory)
+    directory.mkdir(exist_ok=True)
+    export_onnx(model.weights, directory / "step.onnx")
+    curve_png = model.curve.save_png(directory / "training_curve.png", f"{model.kind} training")
+    description = {
+        "kind": model.kind,
+        "step": {
+            "file": "step.onnx",
+            "inputs": {"u": [1, 1], "x": [1, model.weights.state_order]},
+            "outputs": {"y": [1, 1], "x_next": [1, model.weights.state_order]},
+            "initial_state": "zeros (rest)",
+        },
+        "weights": model.weights.as_dict(),
+        "training": {**record, "curve": model.curve.as_dict(), "curve_png": curve_png.name},
+    }
+    (directory / "model.json").write_text(json.dumps(description, indent=2) + "\n")
+    return directory
