@@ -63,3 +63,17 @@ def test_a_periodic_force_reaches_a_periodic_response():
     n = PERIOD_SAMPLES * UPSAMPLE
     last, before = y[2 * n : 3 * n], y[n : 2 * n]
     assert np.sqrt(np.mean((last - before) ** 2)) < 1e-3 * np.std(last)
+
+
+def test_the_arx_baseline_recovers_a_linear_system_it_did_not_see_the_orders_of():
+    from scipy.signal import lfilter
+
+    from bench.bouc_wen import fit_arx
+
+    u = np.random.default_rng(3).normal(0, 1, 4000)
+    y = lfilter([0.0, 0.3, 0.1], [1.0, -1.2, 0.5], u)
+    simulate, orders = fit_arx(u, y, 3200)
+    assert orders[0] >= 2 and orders[1] >= 2
+    u_new = np.random.default_rng(4).normal(0, 1, 1000)
+    truth = lfilter([0.0, 0.3, 0.1], [1.0, -1.2, 0.5], u_new)
+    assert np.max(np.abs(simulate(u_new, "rest") - truth)) < 1e-6 * np.ptp(truth)
