@@ -1,7 +1,7 @@
 """The Bouc-Wen hysteresis benchmark (Noël & Schoukens 2016): pmactl's models beside published ones.
 
 Usage: python bench/bouc_wen.py [--realisations 5] [--seed 0] [--models state-space lstm-narmax arx pi mpi preisach]
-                                [--ss-epochs 100] [--lstm-epochs 150]
+                                [--ss-epochs 250] [--lstm-epochs 150]
 
 The data are regenerated from the published equations (:mod:`bench.bouc_wen_data`; nothing is
 downloaded): ``--realisations`` random-phase multisines of 5 periods (8192 samples each at
@@ -156,9 +156,9 @@ def print_table(results: list[Result], command: str) -> None:
     print("| model | multisine test RMSE [m] | sine-sweep RMSE [m] | training CPU [s] | wall [s] |")
     print("|---|---:|---:|---:|---:|")
     for r in results:
-        print(f"| pmactl {r.name} | {r.multisine_rmse:.3g} | {r.sweep_rmse:.3g} | {r.cpu_s:.1f} | {r.wall_s:.1f} |")
+        print(f"| pmactl {r.name} | {r.multisine_rmse:.3e} | {r.sweep_rmse:.3e} | {r.cpu_s:.1f} | {r.wall_s:.1f} |")
     for name, value in PUBLISHED:
-        print(f"| {name} | {value:.3g} | (not checked) | | |")
+        print(f"| {name} | {value:.3e} | (not checked) | | |")
     for r in results:
         if r.name == "state-space":
             ratios = ", ".join(f"{r.multisine_rmse / value:.2f}x {name.split()[0]}" for name, value in PUBLISHED)
@@ -170,7 +170,7 @@ def main() -> None:
     parser.add_argument("--realisations", type=int, default=5)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--models", nargs="+", default=list(MODELS), choices=MODELS)
-    parser.add_argument("--ss-epochs", type=int, default=100)
+    parser.add_argument("--ss-epochs", type=int, default=250)
     parser.add_argument("--lstm-epochs", type=int, default=150)
     args = parser.parse_args()
     import torch

@@ -16,17 +16,27 @@ from host.train.state_space import (
 )
 
 TINY = StateSpaceSettings(
-    hidden=8, encoder_lags=6, encoder_hidden=8, window=32, batch=16, steps_per_epoch=15, score_horizon=400, patience=50
+    state_order=2,  # the plant's order
+    hidden=8,
+    encoder_lags=6,
+    encoder_hidden=8,
+    window=32,
+    batch=16,
+    steps_per_epoch=15,
+    score_horizon=400,
+    patience=50,
 )
 
 
 def plant(u: np.ndarray) -> np.ndarray:
-    """A plant we did not fit anything to: a lightly damped resonance with a saturating spring."""
+    """A plant we did not fit anything to: a lightly damped resonance with a hardening (Duffing) spring."""
     y = np.zeros_like(u)
     x1 = x2 = 0.0
     for k in range(u.size - 1):
         y[k] = x1
-        x1, x2 = x1 + 0.1 * x2, x2 + 0.1 * (u[k] - 2.0 * np.tanh(2.0 * x1) - 0.3 * x2)
+        for _ in range(4):  # semi-implicit Euler at a quarter of the sample period
+            x2 += 0.025 * (u[k] - x1 - x1**3 - 0.3 * x2)
+            x1 += 0.025 * x2
     y[-1] = x1
     return y
 

@@ -6,9 +6,9 @@ rest state ``x = 0, u = 0`` stays an equilibrium and "from rest" means ``x = 0``
     x(k+1) = A x(k) + B u(k) + W2 (tanh(W1 [x(k), u(k)] + b1) - tanh(b1))
     y(k)   = C x(k)
 
-The linear part starts from an ARX fit (equation error, least squares; ``state_order`` poles and
-zeros) written in observer canonical form; the net's output layer starts small, so training
-starts from the linear model and the net learns what it misses (hysteresis inside a resonance,
+The linear part starts from an ARX fit (equation error, least squares; the order up to
+``state_order`` whose free run fits best) in real Schur form; the net's output layer starts at
+zero, so training starts from the linear model and the net learns what it misses (hysteresis inside a resonance,
 for the Bouc-Wen benchmark: ``bench/bouc_wen.py``). This is the model class of Forgione & Piga
 (2021) and Beintema et al. (2021, SUBNET), minus everything a 1 kHz edge step cannot afford.
 
@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from host.train.common import Curve, EarlyStopping, Split, progress
+from host.train.common import Curve, EarlyStopping, Split, progress, seed_everything
 
 if TYPE_CHECKING:  # torch is imported where training runs (the train extra)
     import torch
@@ -46,25 +46,30 @@ if TYPE_CHECKING:  # torch is imported where training runs (the train extra)
 class StateSpaceSettings:
     """The trainer's tunables in one place (sizes in samples).
 
-    Provenance: chosen on the Bouc-Wen benchmark's *training* realisations and their held-out
-    tail (bench/bouc_wen.py), never on its test signals; a 3-state linear part is the system's
-    order (2 mechanical states + 1 hysteretic), the rest are the usual sizes of the cited
-    works scaled down to a 2-core machine.
+    Provenance: chosen on the Bouc-Wen benchmark's training realisations by their held-out tail
+    score (bench/bouc_wen.py, seed 0; 120 epochs): 3 states stalled at 1.0e-4 m (the linear
+    part's order: 2 mechanical states + 1 hysteretic), 4 states reached 3.6e-5 and 5 states
+    2.7e-5; Adam at 5e-3 with a patience of 12 epochs stopped on the plateau before the drop that
+    a rate decaying from 3e-3 reaches (the drop comes after 30-40 epochs), hence the patience.
+    The net, encoder, window and batch sizes are those of the cited works scaled down to a
+    2-core machine, not tuned.
     """
 
-    state_order: int = 3
+    state_order: int = 5
     hidden: int = 32
     encoder_lags: int = 16
     encoder_hidden: int = 32
     window: int = 128
     batch: int = 64
     steps_per_epoch: int = 40
-    lr: float = 2e-3
-    lr_final: float = 2e-4  # cosine decay over the epochs to this rate
-    net_init_scale: float = 0.01  # of the output layer W2
+    lr: float = 3e-3
+    lr_final: float = 1e-4  # cosine decay over the epochs to this rate
+    net_init_scale: float = (
+        0.0  # largest initial entry of the output layer W2; 0: the start is exactly the linear model
+    )
     score_horizon: int = 2048  # samples each held-out lane runs free
     max_score_lanes: int = 8
-    patience: int = 12
+    patience: int = 30
     smoothing: float = 0.5
 
 
@@ -133,24 +138,45 @@ def simulate_numpy(
 def arx_init(
     u: NDArray[np.float64], y: NDArray[np.float64], order: int
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """ARX(order, order, delay 1) by least squares, as (A, B, C) in observer canonical form.
+    """The linear start: ARX(n, n, delay 1) by least squares for n = 1..order, the one whose free
+    run fits ``y`` best, as (A, B, C) of size ``order`` in real Schur form.
 
-    ``y(k) = sum a_i y(k-i) + sum b_i u(k-i)`` becomes ``x1 = y``, ``A = [a | I; 0]``, ``B = b``.
+    ``y(k) = sum a_i y(k-i) + sum b_i u(k-i)`` is first written in observer canonical form
+    (``x1 = y``, ``A = [a | I; 0]``, ``B = b``, zeros beyond n), then turned into Schur form.
+    Poles at or outside radius 0.99 are pulled inside it: an unstable start would blow up every
+    window. The equation error picks the coefficients, the simulation error
+    the order: a high-order equation-error fit can simulate far worse than a low-order one.
     """
-    rows = np.column_stack(
-        [y[order - i : y.size - i] for i in range(1, order + 1)]
-        + [u[order - i : u.size - i] for i in range(1, order + 1)]
-    )
-    theta, *_ = np.linalg.lstsq(rows, y[order:], rcond=None)
-    a_coef, b_coef = theta[:order], theta[order:]
+    from scipy.signal import lfilter
+
+    best: tuple[float, NDArray[np.float64], NDArray[np.float64]] | None = None
+    for n in range(1, order + 1):
+        rows = np.column_stack(
+            [y[n - i : y.size - i] for i in range(1, n + 1)] + [u[n - i : u.size - i] for i in range(1, n + 1)]
+        )
+        theta, *_ = np.linalg.lstsq(rows, y[n:], rcond=None)
+        a_coef, b_coef = np.asarray(theta[:n], dtype=np.float64), np.asarray(theta[n:], dtype=np.float64)
+        poles = np.roots(np.concatenate([[1.0], -a_coef]))
+        if np.max(np.abs(poles), initial=0.0) >= 0.99:
+            poles = np.where(np.abs(poles) >= 0.99, 0.99 * poles / np.abs(poles), poles)
+            a_coef = -np.real(np.poly(poles))[1:]
+        simulated = lfilter(np.concatenate([[0.0], b_coef]), np.concatenate([[1.0], -a_coef]), u)
+        error = float(np.mean((simulated - y) ** 2))
+        if np.isfinite(error) and (best is None or error < best[0]):
+            best = (error, np.pad(a_coef, (0, order - n)), np.pad(b_coef, (0, order - n)))
+    assert best is not None
     a = np.zeros((order, order))
-    a[:, 0] = a_coef
+    a[:, 0] = best[1]
     a[:-1, 1:] = np.eye(order - 1)
-    if np.max(np.abs(np.linalg.eigvals(a))) >= 1.0:  # an unstable fit would blow up every window
-        a[:, 0] *= 0.99 / np.max(np.abs(np.linalg.eigvals(a)))
     c = np.zeros(order)
     c[0] = 1.0
-    return a, np.asarray(b_coef, dtype=np.float64).copy(), c
+    # the companion form's coefficients fix its poles badly (float32 rounding of a 5th-order
+    # polynomial with poles near 1 can make it unstable); the real Schur form, an orthogonal change
+    # of state, holds the poles on its (block) diagonal where rounding barely moves them
+    from scipy.linalg import schur
+
+    t, z = schur(a, output="real")
+    return np.asarray(t, dtype=np.float64), z.T @ best[2], c @ z
 
 
 def _lag_matrix(
@@ -245,7 +271,7 @@ def train_state_space(
     split_fn: Callable[[int], Split],
     *,
     seed: int = 0,
-    epochs: int = 100,
+    epochs: int = 200,
     quiet: bool = True,
     settings: StateSpaceSettings = SETTINGS,
 ) -> tuple[NeuralStateSpace, Split]:
@@ -257,6 +283,7 @@ def train_state_space(
     import torch
 
     s = settings
+    seed_everything(seed)  # the caller may have seeded already (train_model does); the model must not depend on it
     split = split_fn(0)
     u_scale = float(np.std(u[: split.tail])) or 1.0
     y_scale = float(np.std(y[: split.tail])) or 1.0
