@@ -1,7 +1,7 @@
 """The Bouc-Wen hysteresis benchmark (Noël & Schoukens 2016): pmactl's models beside published ones.
 
 Usage: python bench/bouc_wen.py [--realisations 5] [--seed 0] [--models state-space lstm-narmax arx pi mpi preisach]
-                                [--ss-epochs 250] [--lstm-epochs 150]
+                                [--ss-epochs 250] [--lstm-epochs 150] [--save DIR]
 
 The data are regenerated from the published equations (:mod:`bench.bouc_wen_data`; nothing is
 downloaded): ``--realisations`` random-phase multisines of 5 periods (8192 samples each at
@@ -101,7 +101,25 @@ def fit_arx(u: NDArray[np.float64], y: NDArray[np.float64], tail: int) -> tuple[
     return (lambda signal, _branch: np.asarray(lfilter(num, den, signal))), (na, nb)
 
 
-def run(models: tuple[str, ...], realisations: int, seed: int, ss_epochs: int, lstm_epochs: int) -> list[Result]:
+def onnx_parity(model, test: Record, save: Path | None) -> None:  # noqa: ANN001 (NeuralStateSpace)
+    """Export the step graph and print its onnxruntime free run's largest difference from numpy's."""
+    import tempfile
+
+    from host.train.state_space import save_state_space, simulate_onnx
+
+    with tempfile.TemporaryDirectory() as scratch:
+        folder = save_state_space(model, save or Path(scratch) / "state-space", {"bench": "bouc_wen"})
+        onnx_run = simulate_onnx(folder / "step.onnx", test.u, model.weights.state_order)
+    difference = float(np.max(np.abs(onnx_run - model.simulate(test.u))))
+    print(
+        f"state-space step.onnx (onnxruntime, float32) vs numpy free run on the {test.name}: max |diff| "
+        f"{difference:.2e} m ({difference / float(np.ptp(test.y)):.1e} of the output range)"
+    )
+
+
+def run(
+    models: tuple[str, ...], realisations: int, seed: int, ss_epochs: int, lstm_epochs: int, save: Path | None = None
+) -> list[Result]:
     from host.train import train_model
     from host.train.common import seed_everything, split_record
     from host.train.state_space import train_state_space
@@ -131,6 +149,9 @@ def run(models: tuple[str, ...], realisations: int, seed: int, ss_epochs: int, l
             )
             simulate: Simulate = trained.simulate
             branches = ("rest",)
+            cpu, wall = time.process_time() - cpu, time.perf_counter() - wall  # the training time so far;
+            onnx_parity(trained, tests[0], save)  # the check is not training: its time is left out
+            cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
         elif name == "lstm-narmax":
             simulate = train_model("lstm-narmax", [train], seed=seed, epochs=lstm_epochs).model.simulate
         elif name == "arx":
@@ -172,11 +193,12 @@ def main() -> None:
     parser.add_argument("--models", nargs="+", default=list(MODELS), choices=MODELS)
     parser.add_argument("--ss-epochs", type=int, default=250)
     parser.add_argument("--lstm-epochs", type=int, default=150)
+    parser.add_argument("--save", type=Path, help="write the state-space model here (step.onnx, model.json)")
     args = parser.parse_args()
     import torch
 
     torch.set_num_threads(1)
-    results = run(tuple(args.models), args.realisations, args.seed, args.ss_epochs, args.lstm_epochs)
+    results = run(tuple(args.models), args.realisations, args.seed, args.ss_epochs, args.lstm_epochs, args.save)
     print_table(results, "python " + " ".join(sys.argv))
 
 
