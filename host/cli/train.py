@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -17,7 +18,7 @@ if TYPE_CHECKING:
     from host.train import Trained
     from host.train.net_bundle import NetBundle
 
-DEFAULT_EPOCHS = {"hammerstein": 60, "lstm-narmax": 150, "correction": 300}
+DEFAULT_EPOCHS = {"hammerstein": 60, "lstm-narmax": 150, "state-space": 250, "correction": 300}
 BUNDLE_MODELS = ("lstm-narmax", "hammerstein")  # --save writes a bundle store
 
 
@@ -29,8 +30,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
     train.add_argument(
         "--model",
         required=True,
-        choices=["hammerstein", "lstm-narmax", "correction"],
-        help="hammerstein (Ai2019: MPI + BP net + ARX), lstm-narmax (Wu2025), or correction "
+        choices=["hammerstein", "lstm-narmax", "state-space", "correction"],
+        help="hammerstein (Ai2019: MPI + BP net + ARX), lstm-narmax (Wu2025), state-space (linear model + tanh "
+        "net on simulation error: the Bouc-Wen benchmark's winner, not yet deployable), or correction "
         "(the edge's inverse correction, added to --bundle)",
     )
     train.add_argument(
@@ -39,7 +41,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
     train.add_argument("--test", action="append", default=[], metavar="CSV", help="held-out recording (repeatable)")
     train.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same model")
     train.add_argument(
-        "--epochs", type=int, help="training epochs (default: hammerstein 60, lstm-narmax 150, correction 300)"
+        "--epochs",
+        type=int,
+        help="training epochs (default: hammerstein 60, lstm-narmax 150, state-space 250, correction 300)",
     )
     train.add_argument(
         "--calibration",
@@ -54,7 +58,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
         "--save",
         metavar="DIR",
         help="lstm-narmax, hammerstein: write a bundle store (tables, the forward net and an inverse LSTM-NARMAX "
-        "trained with --epochs too; new release in an existing store); correction: the training curve",
+        "trained with --epochs too; new release in an existing store); state-space: a model folder (step.onnx, "
+        "model.json, the training curve); correction: the training curve",
     )
     add_key_option(train, "(of --save for lstm-narmax and hammerstein, of --bundle for --model correction)")
     add_data_options(train)
@@ -115,7 +120,17 @@ def run(args: argparse.Namespace) -> int:
             "fit_seconds": trained.fit_seconds,
             "tests": tests_json,
         }
-        written = _save_bundle(args, trained, records, record, tests)
+        if args.model in BUNDLE_MODELS:
+            written = _save_bundle(args, trained, records, record, tests)
+        else:  # state-space: a model folder, no edge evaluator yet
+            from host.train import save_model
+
+            folder = save_model(trained, args.save, record)
+            print(
+                f"model folder written to {folder} (step.onnx, model.json, training_curve.png); not a bundle: "
+                "the edge cannot run a state-space model yet",
+                file=sys.stderr,
+            )
     if args.json:
         # the documented keys only (tests/test_train.py); warnings went to stderr
         out: dict[str, object] = {"model": args.model, "fit_seconds": trained.fit_seconds, "tests": tests_json}

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,12 +21,18 @@ from edge.errors import ModelError
 from edge.hysteresis.lut import write_table
 from host.data import Measurement
 from host.evaluate import Prediction, predict_with_candidates
-from host.train.common import seed_everything, split_record
+from host.train.common import Split, seed_everything, split_record
 from host.train.hammerstein import Hammerstein, train_hammerstein
 from host.train.lstm_narmax import LSTMNarmax, train_lstm_narmax
+from host.train.state_space import NeuralStateSpace, save_state_space, train_state_space
 
-MODELS = ("hammerstein", "lstm-narmax")
-TrainedModel = Hammerstein | LSTMNarmax
+MODELS = ("hammerstein", "lstm-narmax", "state-space")
+TrainedModel = Hammerstein | LSTMNarmax | NeuralStateSpace
+TRAINERS: dict[str, Callable[..., tuple[TrainedModel, Split]]] = {
+    "hammerstein": train_hammerstein,
+    "lstm-narmax": train_lstm_narmax,
+    "state-space": train_state_space,
+}
 
 
 def join(records: list[Measurement]) -> Measurement:
@@ -77,8 +84,7 @@ def train_model(
     def split_fn(memory_start: int):  # noqa: ANN202
         return split_record(len(record), memory_start, tail_fraction, record.source)
 
-    trainer = train_hammerstein if kind == "hammerstein" else train_lstm_narmax
-    model, split = trainer(record.u, record.y, split_fn, seed=seed, epochs=epochs, quiet=quiet)
+    model, split = TRAINERS[kind](record.u, record.y, split_fn, seed=seed, epochs=epochs, quiet=quiet)
     return Trained(model, time.perf_counter() - start, len(record), split.start, split.tail, seed)
 
 
@@ -109,6 +115,8 @@ def save_model(trained: Trained, directory: str | Path, record: dict[str, object
     """Write ``step.onnx``, ``model.json``, ``operator.npz`` and ``training_curve.png`` to ``directory``."""
     from models_export.onnx_step import export_step
 
+    if isinstance(trained.model, NeuralStateSpace):
+        return save_state_space(trained.model, directory, record)
     model = trained.model
     directory = Path(directory)
     directory.mkdir(exist_ok=True)  # its parent must exist: a typo should not grow a tree
