@@ -125,6 +125,8 @@ class Rules:
     # held-out folds: blocks in time (long records) or runs (short runs)
     max_folds: int = 5
     min_fold_samples: int = 100
+    # a cause passing its unique test is named only when held-out data confirm it (Clark-West p <= alpha)
+    heldout_gate: bool = True
     # the held-out confirmation also needs the gain's 90 % interval above 0 (beside Clark-West p <= alpha)
     heldout_interval_gate: bool = True
     # a cause whose unique test passes on the full record but fails with the richer baseline is the

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -138,6 +139,49 @@ def decide(tests: dict[str, GroupTest]) -> tuple[list[str], list[str]]:
     return [], sorted(joint, key=lambda g: tests[g].marginal_p)
 
 
+@dataclass
+class Choice:
+    """What :func:`choose` decided from the tests, the ladder and the held-out trials."""
+
+    cause: str
+    rejected: list[str]
+    class_mismatch: bool
+    not_confirmed: bool
+    heldout_of: str | None  # whose held-out trial the verdict reports
+
+
+def choose(
+    ranked: list[str],
+    tests: dict[str, GroupTest],
+    richer_tests: Callable[[], dict[str, GroupTest]],
+    trial: Callable[[str], HeldOut],
+    rules: Rules,
+) -> Choice:
+    """The first of ``ranked`` (causes whose unique test passed) that survives the robustness
+    ladder (when ``rules.ladder_drop`` < 1) and the held-out confirmation (when
+    ``rules.heldout_gate``). ``richer_tests()`` and ``trial(cause)`` compute on demand, so the
+    same rules replay from a dump (``bench/diagnose_replay.py --v3``) without refits."""
+    cause, class_mismatch, not_confirmed = "none", False, False
+    rejected: list[str] = []
+    heldout_of: str | None = None
+    for candidate in ranked:  # the largest unique share first; the first confirmed is named
+        if CAUSES[candidate].kind == "dynamic" and rules.ladder_drop < 1.0:
+            r = richer_tests()[candidate]
+            if r.unique_p > r.level and r.unique_stat < (1 - rules.ladder_drop) * tests[candidate].unique_stat:
+                class_mismatch = class_mismatch or not rejected
+                rejected.append(candidate)
+                continue
+        h = trial(candidate)
+        # nested confirmation: the extension must predict rows it was not fitted on
+        confirmed = h.clark_west_p <= rules.alpha and (h.interval[0] > 0.0 or not rules.heldout_interval_gate)
+        if confirmed or not rules.heldout_gate:
+            return Choice(candidate, rejected, False, False, candidate)
+        if not rejected:
+            heldout_of, not_confirmed = candidate, True
+        rejected.append(candidate)
+    return Choice(cause, rejected, class_mismatch, not_confirmed, heldout_of)
+
+
 def diagnose_runs(
     runs: list[Measurement], *, rules: Rules = RULES, progress: bool = False, seed: int = 0
 ) -> DiagnosisV3:
@@ -150,24 +194,19 @@ def diagnose_runs(
         base, groups, tests, notes = score(rs, rules.preisach_levels, rules, seed)
         ranked, cannot_tell = decide(tests)
         masks, holdout = holdout_folds(rs, rules)
-        richer: dict[str, GroupTest] | None = None
-        cause, class_mismatch, not_confirmed = "none", False, False
-        result_heldout: HeldOut | None = None
-        rejected: list[str] = []
+        richer: dict[str, GroupTest] = {}
         trials: dict[str, HeldOut] = {}
-        for candidate in ranked:  # the largest unique share first; the first confirmed is named
-            if CAUSES[candidate].kind == "dynamic":
-                if richer is None:
-                    _say(progress, "diagnose v3: checking the dynamic causes against a richer baseline ...")
-                    richer = score(rs, rules.richer_levels, replace(rules, composite_draws=0), seed + 1)[2]
-                r = richer[candidate]
-                if r.unique_p > r.level and r.unique_stat < (1 - rules.ladder_drop) * tests[candidate].unique_stat:
-                    class_mismatch = class_mismatch or not rejected
-                    rejected.append(candidate)
-                    continue
+
+        def richer_tests() -> dict[str, GroupTest]:
+            if not richer:
+                _say(progress, "diagnose v3: checking the dynamic causes against a richer baseline ...")
+                richer.update(score(rs, rules.richer_levels, replace(rules, composite_draws=0), seed + 1)[2])
+            return richer
+
+        def trial(candidate: str) -> HeldOut:
             _say(progress, f"diagnose v3: held-out gain of {candidate} over {len(masks)} folds ...")
             column = CAUSES[candidate].column
-            trial = held_out(
+            trials[candidate] = held_out(
                 rs,
                 base.nuisance,
                 base.smoothness,
@@ -177,14 +216,16 @@ def diagnose_runs(
                 np.random.default_rng(seed),
                 rs.columns.get(column) if column else None,
             )
-            trials[candidate] = trial
-            # nested confirmation: the extension must predict rows it was not fitted on
-            if trial.clark_west_p <= rules.alpha and (trial.interval[0] > 0.0 or not rules.heldout_interval_gate):
-                cause, result_heldout, class_mismatch, not_confirmed = candidate, trial, False, False
-                break
-            if not rejected:
-                result_heldout, not_confirmed = trial, True
-            rejected.append(candidate)
+            return trials[candidate]
+
+        choice = choose(ranked, tests, richer_tests, trial, rules)
+        cause, class_mismatch, not_confirmed, rejected = (
+            choice.cause,
+            choice.class_mismatch,
+            choice.not_confirmed,
+            choice.rejected,
+        )
+        result_heldout = trials.get(choice.heldout_of) if choice.heldout_of else None
     also = [g for g in ranked if g != cause and g not in rejected] if cause != "none" else []
     first = rejected[0] if rejected else "none"
     out = DiagnosisV3(
