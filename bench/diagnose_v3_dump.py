@@ -111,7 +111,7 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
             np.random.default_rng(seed),
             rs.columns.get(column) if column else None,
         )
-    ranked, cannot_tell = decide(tests)
+    ranked, cannot_tell = decide(tests, rules)
     choice = choose(ranked, tests, lambda: richer, trials.__getitem__, rules)
     oracle = None
     if wave is not None:

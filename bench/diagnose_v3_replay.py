@@ -82,7 +82,7 @@ class Replayed:
 def replay(row: Line, rules: Rules) -> Replayed:
     """The verdict of one dumped record under ``rules``, and where a true effect was lost."""
     tests = _tests(row, rules)
-    ranked, _ = decide(tests)
+    ranked, _ = decide(tests, rules)
     choice = choose(ranked, tests, lambda: _richer(row, tests), lambda g: _trial(row, g), rules)
     effect = row["effect"]
     truth = tests.get(effect)

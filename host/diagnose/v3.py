@@ -28,11 +28,11 @@ from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
 from host.data import Measurement
-from host.diagnose.composite import null_classes, simulated_records, unrestricted_residual
+from host.diagnose.composite import class_nuisance, null_classes, simulated_records, unrestricted_residual
 from host.diagnose.conditional import GroupTest, group_tests, whitened
 from host.diagnose.groups import branch_of, cause_groups, column_group
 from host.diagnose.heldout import HeldOut, held_out, holdout_folds
-from host.diagnose.nuisance import Baseline, fit_baseline
+from host.diagnose.nuisance import Baseline, fit_baseline, with_nuisance
 from host.diagnose.rules import CAUSES, RULES, Rules
 from host.diagnose.runs import RunSet, node_differences, preisach_nodes, run_set
 
@@ -106,7 +106,18 @@ def score(
     """Baseline at ``levels`` and every cause's tests."""
     nodes, notes = preisach_nodes(rs, levels)
     smooth = node_differences(levels)
-    base = fit_baseline(rs, nodes, smooth.T @ smooth, rules.output_lags_s, rules.node_ridge, rules.nuisance_lags_s)
+    base = fit_baseline(
+        rs,
+        nodes,
+        smooth.T @ smooth,
+        rules.output_lags_s,
+        rules.node_ridge,
+        rules.nuisance_lags_s,
+        rules.resonance_hz if rules.resonance_nuisance else (),
+        rules.resonance_zetas,
+    )
+    if rules.class_nuisance:
+        base = with_nuisance(rs, base, class_nuisance(rs, base, rules), rules.node_ridge)
     groups = cause_groups(rs, base, rules)
     w = whitened(rs, base, rules)
     branch = branch_of(rs)
@@ -126,14 +137,23 @@ def score(
     return base, groups, tests, notes
 
 
-def decide(tests: dict[str, GroupTest]) -> tuple[list[str], list[str]]:
+def decide(tests: dict[str, GroupTest], rules: Rules = RULES) -> tuple[list[str], list[str]]:
     """(candidates, cannot_tell): the causes whose unique test passes at their level, the largest
-    unique share first (a physical cause before ``slow_drift``); or, when none does, the one cause
-    significant beyond the baseline alone; else those significant only jointly (cannot tell)."""
+    unique share first (a physical cause before ``slow_drift``); with ``rules.marginal_candidates``
+    they are followed by the causes significant beyond the baseline alone (largest marginal
+    statistic per degree of freedom first): groups overlap, so a real effect's unique part can
+    vanish into a rival's directions, and the held-out confirmation then tells which one
+    predicts. Without it, when no unique test passes, the one cause significant beyond the
+    baseline alone; else those significant only jointly (cannot tell)."""
     unique = [g for g, t in tests.items() if t.unique_p <= t.level]
-    if unique:
-        return sorted(unique, key=lambda g: (g == "slow_drift", -tests[g].unique_share)), []
+    ranked = sorted(unique, key=lambda g: (g == "slow_drift", -tests[g].unique_share))
     joint = [g for g, t in tests.items() if t.marginal_p <= t.level]
+    if rules.marginal_candidates:
+        rest = [g for g in joint if g not in unique]
+        ranked += sorted(rest, key=lambda g: (g == "slow_drift", -tests[g].marginal_stat / max(tests[g].df, 1)))
+        return ranked, [] if unique or len(rest) < 2 else sorted(rest, key=lambda g: tests[g].marginal_p)
+    if unique:
+        return ranked, []
     if len(joint) == 1:
         return joint, []
     return [], sorted(joint, key=lambda g: tests[g].marginal_p)
@@ -192,7 +212,7 @@ def diagnose_runs(
     with threadpool_limits(limits=threads):
         _say(progress, f"diagnose v3: {rs.n_runs} run(s), {rs.y.size} samples: baseline and tests ...")
         base, groups, tests, notes = score(rs, rules.preisach_levels, rules, seed)
-        ranked, cannot_tell = decide(tests)
+        ranked, cannot_tell = decide(tests, rules)
         masks, holdout = holdout_folds(rs, rules)
         richer: dict[str, GroupTest] = {}
         trials: dict[str, HeldOut] = {}
