@@ -1,6 +1,11 @@
 """Decide every dumped record again with the working tree's decision rules, and score the verdicts.
 
 Usage: python bench/diagnose_replay.py DUMP.jsonl [DUMP2.jsonl ...] [--set tuning,fresh,...] [--changes]
+       python bench/diagnose_replay.py --v3 DUMP.jsonl [--rules field=value,...] [--rules ...]
+
+``--v3``: the dump is from ``bench/diagnose_v3_dump.py``, and every ``--rules`` (overrides of
+:class:`host.diagnose.rules.Rules`) is compared side by side with the current rules
+(:mod:`bench.diagnose_v3_replay`).
 
 Reads the lines ``bench/diagnose_dump.py`` wrote and replays
 :meth:`host.diagnose.decide.DecisionInputs.verdict` on each: no model is refitted, so a change to
@@ -146,8 +151,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("dumps", type=Path, nargs="+", help="JSON lines from bench/diagnose_dump.py")
     parser.add_argument("--set", help="comma-separated families to keep (default: every family in the dumps)")
     parser.add_argument("--changes", action="store_true", help="list every record whose verdict changed")
+    parser.add_argument("--v3", action="store_true", help="the dumps are from bench/diagnose_v3_dump.py")
+    parser.add_argument("--rules", action="append", default=[], help="--v3: Rules overrides to compare")
     args = parser.parse_args(argv)
     rows = loaded(parser, args.dumps, args.set)
+    if args.v3:
+        return _main_v3(parser, rows, args.rules, args.changes)
     results = []
     for r in rows:
         try:
@@ -169,6 +178,29 @@ def main(argv: list[str] | None = None) -> int:
             "null for it (a live run tests it): "
             + ", ".join(f"{r['family']}/{r['index']:03d} {v} (truth {r['effect']})" for r, v in inexact)
         )
+    return 0
+
+
+def _main_v3(parser: argparse.ArgumentParser, rows: list[Line], overrides: list[str], changes: bool) -> int:
+    from bench.diagnose_v3_dump import overridden
+    from bench.diagnose_v3_replay import replay, table
+    from host.diagnose.rules import RULES
+
+    if not all(r.get("v3") for r in rows):
+        parser.error("--v3: these dumps are not from bench/diagnose_v3_dump.py (no 'v3' key)")
+    try:
+        versions = {"current": RULES, **{text: overridden(text) for text in overrides}}
+    except ValueError as e:
+        parser.error(str(e))
+    print("\n".join(table(rows, versions)))
+    same = sum(replay(r, RULES).verdict == r["verdict"] for r in rows)
+    print(f"{same} of {len(rows)} verdicts under the current rules equal the dump's")
+    if changes:
+        for text in overrides:
+            for r in rows:
+                a, b = replay(r, RULES).verdict, replay(r, versions[text]).verdict
+                if a != b:
+                    print(f"  [{text}] {r['family']}/{r['index']:03d} {r['case']}: {a} -> {b} (truth {r['effect']})")
     return 0
 
 

@@ -72,13 +72,17 @@ def _scaled_input(rs: RunSet) -> NDArray[np.float64]:
     return np.asarray((rs.u - mid) / half)
 
 
-def generalised_pi(rs: RunSet, lag_s: float) -> NDArray[np.float64]:
-    """Plays on a uniform threshold grid (each run starting relaxed at its first input), then a
-    cubic output map and the lag."""
+def pi_plays(rs: RunSet) -> Matrix:
+    """Play operators on a uniform threshold grid of the scaled input, each run starting relaxed
+    at its first input (n x thresholds)."""
     u = _scaled_input(rs)
     thresholds = np.arange(_PI_THRESHOLDS) * 1.0 / _PI_THRESHOLDS
-    plays = np.vstack([play_outputs(u[a:b], thresholds, np.full(thresholds.size, u[a])) for a, b in rs.bounds()])
-    return _cubic_map(rs, plays, lag_s)
+    return np.vstack([play_outputs(u[a:b], thresholds, np.full(thresholds.size, u[a])) for a, b in rs.bounds()])
+
+
+def generalised_pi(rs: RunSet, lag_s: float) -> NDArray[np.float64]:
+    """Plays on a uniform threshold grid, then a cubic output map and the lag."""
+    return _cubic_map(rs, pi_plays(rs), lag_s)
 
 
 def _bouc_wen_state(u: list[float], stiffness: float, beta_share: float) -> list[float]:
@@ -92,19 +96,25 @@ def _bouc_wen_state(u: list[float], stiffness: float, beta_share: float) -> list
     return out
 
 
-def bouc_wen(rs: RunSet, lag_s: float) -> NDArray[np.float64]:
-    """The Bouc-Wen model (n = 1) whose shape on the grid fits best, its state and the input
-    through a cubic map and the lag."""
+def bouc_wen_core(rs: RunSet, lag_s: float) -> tuple[Matrix, NDArray[np.float64]]:
+    """The Bouc-Wen model (n = 1) whose shape on the grid fits best: its [input, state] columns
+    and its fit (through a cubic map and the lag)."""
     u = _scaled_input(rs)
-    best: tuple[float, NDArray[np.float64]] = (np.inf, rs.y)
+    best: tuple[float, Matrix, NDArray[np.float64]] = (np.inf, np.zeros((rs.y.size, 0)), rs.y)
     for stiffness in _BW_STIFFNESS:
         for share in _BW_BETA_SHARE:
             z = np.concatenate([_bouc_wen_state(u[a:b].tolist(), stiffness, share) for a, b in rs.bounds()])
-            fit = _cubic_map(rs, np.column_stack([u, z]), lag_s)
+            core = np.column_stack([u, z])
+            fit = _cubic_map(rs, core, lag_s)
             sse = float(np.sum((rs.y - fit) ** 2))
             if sse < best[0]:
-                best = (sse, fit)
-    return best[1]
+                best = (sse, core, fit)
+    return best[1], best[2]
+
+
+def bouc_wen(rs: RunSet, lag_s: float) -> NDArray[np.float64]:
+    """The best-fitting Bouc-Wen model's output (see :func:`bouc_wen_core`)."""
+    return bouc_wen_core(rs, lag_s)[1]
 
 
 def null_classes(rs: RunSet, base: Baseline, rules: Rules) -> list[NullClass]:
@@ -148,3 +158,27 @@ def simulated_records(
         for a, b in rs.bounds():
             drawn[a:b] = lfilter([1.0], np.r_[1.0, -ar], drawn[a:b], axis=0)
     return np.asarray(fit[:, None] + drawn)
+
+
+def class_nuisance(rs: RunSet, base: Baseline, rules: Rules) -> Matrix:
+    """The other effect-free classes as NUISANCE directions (``Rules.class_nuisance``): the
+    generalised-PI plays, the best Bouc-Wen core's state and the richer-level Preisach fit, each
+    through the baseline's output lag, with the cubic output map of the PI and Bouc-Wen fits and
+    the lag tangent (a longer lag) of each class's fit. All are functions of the input's
+    rate-independent history only, so a class difference is partialled out of every test while a
+    timing, time or column effect keeps its own part (only its rate-independent projection, which
+    no record can attribute, is absorbed)."""
+    lag = base.lag_s
+    plays = pi_plays(rs)
+    bw_core, bw_fit = bouc_wen_core(rs, lag)
+    pi_fit = _cubic_map(rs, plays, lag)
+    nodes, _ = preisach_nodes(rs, rules.richer_levels)
+    smooth = node_differences(rules.richer_levels)
+    lagged = np.column_stack([run_lowpass(rs, nodes, lag), np.ones(rs.y.size)])
+    richer = lagged @ ridge_fit(lagged, rs.y, smooth.T @ smooth, rules.node_ridge)
+    columns = [run_lowpass(rs, plays, lag), run_lowpass(rs, bw_core, lag)]
+    longer = 0.5 * lag + rs.dt
+    for fit in (pi_fit, bw_fit, richer):
+        h = (fit - fit.mean()) / (np.std(fit) or 1.0)
+        columns.append(np.column_stack([fit, h**2, h**3, run_lowpass(rs, fit, longer) - fit]))
+    return np.hstack(columns)

@@ -18,7 +18,7 @@ input-locked structural error is what a column can fit by chance.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -60,9 +60,13 @@ class GroupTest:
     mde: float  # minimal detectable RMS of the effect's own part [units of y], 80 % power at its level
     level: float  # the significance level this cause is tested at (alpha split over the causes)
     null: str  # which null calibrated it
+    # unique and marginal p under each null separately (the p above combines them), for replays
+    p_by_null: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     def as_json(self) -> dict[str, object]:
-        return {k: (round(v, 6) if isinstance(v, float) else v) for k, v in self.__dict__.items()}
+        out: dict[str, object] = {k: (round(v, 6) if isinstance(v, float) else v) for k, v in self.__dict__.items()}
+        out["p_by_null"] = {k: [round(a, 6), round(b, 6)] for k, (a, b) in self.p_by_null.items()}
+        return out
 
 
 @dataclass
@@ -163,7 +167,10 @@ def group_tests(
     columns = [g for g in names if CAUSES[g].kind == "column"]
     level_dynamic = rules.alpha * len(dynamic) / len(names)
     level_column = rules.alpha / len(names)
-    p_u, p_m = _max_t(w, dynamic, marginal, unique, t_m, t_u, rules, rng)
+    by_null = _max_t(w, dynamic, marginal, unique, t_m, t_u, rules, rng)
+    p_u = {g: max(p[0][g] for p in by_null.values()) for g in dynamic}
+    p_m = {g: max(p[1][g] for p in by_null.values()) for g in dynamic}
+    p_by = {g: {k: (p[0][g], p[1][g]) for k, p in by_null.items()} for g in dynamic}
     kinds = "block bootstrap" + (" and within-state permutations" if rules.within_state_null else "")
     nulls = {g: f"max-T over {len(dynamic)} groups: {kinds} ({rules.bootstrap_draws} each)" for g in dynamic}
     if null_records:
@@ -171,6 +178,7 @@ def group_tests(
         for name, sims in null_records.items():
             c_u, c_m = _composite(w, sims, dynamic, marginal, unique, q_all, dof, t_m, t_u)
             for g in dynamic:
+                p_by[g][f"composite:{name}"] = (c_u[g], c_m[g])
                 if c_u[g] > p_u[g]:
                     nulls[g] = (
                         f"max-T over {len(dynamic)} groups against {n_sims} simulated effect-free "
@@ -183,6 +191,7 @@ def group_tests(
         nulls[g] = f"chi-square screen (p > {rules.surrogate_screen_p:g}: surrogates skipped)"
         if min(p_u[g], p_m[g]) <= rules.surrogate_screen_p:
             p_u[g], p_m[g], nulls[g] = _surrogates(w, g, others[g], t_u[g], t_m[g], sigma2, surrogate_group, rules, rng)
+        p_by[g] = {"surrogates" if "surrogate columns" in nulls[g] else "chi-square": (p_u[g], p_m[g])}
     out = {}
     for g in names:
         level = level_dynamic if g in dynamic else level_column
@@ -200,6 +209,7 @@ def group_tests(
             mde(int(unique[g].shape[1]), level, sigma2, n, w.to_units),
             level,
             nulls[g],
+            p_by[g],
         )
     return out
 
@@ -213,10 +223,11 @@ def _max_t(
     t_u: dict[str, float],
     rules: Rules,
     rng: np.random.Generator,
-) -> tuple[dict[str, float], dict[str, float]]:
-    """Single-step max-T adjusted p-values of the dynamic groups, unique and marginal: the larger
-    of the block bootstrap's (noise as the null) and the within-state permutation's (the
-    rate-independent structural error as the null, :mod:`host.diagnose.strata`)."""
+) -> dict[str, tuple[dict[str, float], dict[str, float]]]:
+    """Single-step max-T adjusted p-values of the dynamic groups, (unique, marginal), per null:
+    the block bootstrap (noise as the null) and, when the rules ask for it, the within-state
+    permutation (the rate-independent structural error as the null, :mod:`host.diagnose.strata`).
+    The p a test uses is the larger."""
     e = w.residual
     n = e.size
     length = block_length(e)
@@ -225,14 +236,11 @@ def _max_t(
         lambda count: e[stationary_draws(n, length, count, rng)], dynamic, marginal, unique, t_m, t_u, rules
     )
     if not rules.within_state_null:
-        return boot
+        return {"bootstrap": boot}
     perm = _adjusted(
         lambda count: e[within_strata_permutations(strata, count, rng).T], dynamic, marginal, unique, t_m, t_u, rules
     )
-    return (
-        {g: max(boot[0][g], perm[0][g]) for g in dynamic},
-        {g: max(boot[1][g], perm[1][g]) for g in dynamic},
-    )
+    return {"bootstrap": boot, "permutation": perm}
 
 
 def _composite(

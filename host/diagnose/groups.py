@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from host.diagnose.nuisance import Baseline, run_gradient, run_lowpass
+from host.diagnose.nuisance import Baseline, run_gradient, run_lowpass, through_stage
 from host.diagnose.rules import CAUSES, Rules
 from host.diagnose.runs import RunSet
 
@@ -43,7 +43,7 @@ def rate_group(rs: RunSet, base: Baseline, branch: NDArray[np.float64]) -> NDArr
     v = out_rate / (float(np.percentile(np.abs(out_rate), 95)) or 1.0)
     slow_speed = run_lowpass(rs, np.abs(s), 0.3)
     columns = [s * branch, s * xc, np.abs(s) * xc, np.abs(s) * branch, slow_speed * branch, slow_speed * xc]
-    lagged = run_lowpass(rs, np.column_stack(columns), base.lag_s)
+    lagged = through_stage(rs, base, np.column_stack(columns))
     return np.column_stack([lagged, v * np.abs(v)])
 
 
@@ -54,7 +54,7 @@ def creep_group(rs: RunSet, base: Baseline, rules: Rules) -> NDArray[np.float64]
     if not taus:
         return np.zeros((rs.y.size, 0))
     columns = [run_lowpass(rs, base.x, tau) - base.x for tau in taus]
-    return run_lowpass(rs, np.column_stack(columns), base.lag_s)
+    return through_stage(rs, base, np.column_stack(columns))
 
 
 def _shifted(rs: RunSet, x: NDArray[np.float64], samples: int) -> NDArray[np.float64]:
@@ -71,7 +71,7 @@ def delay_group(rs: RunSet, base: Baseline, rules: Rules) -> NDArray[np.float64]
     one after it for a rate-independent core), plus its second derivative (where a dead time and a
     lag differ at second order), each split by the input's direction (a valve that opens and
     exhausts through different paths)."""
-    lagged = run_lowpass(rs, base.x, base.lag_s)
+    lagged = through_stage(rs, base, base.x)
     shifts = sorted({int(round(d / rs.dt)) for d in rules.delays_s if d / rs.dt >= rules.min_delay_samples})
     columns = [_shifted(rs, lagged, k) - lagged for k in shifts]
     curvature = run_gradient(rs, run_gradient(rs, lagged)) * rs.dt**2
@@ -94,7 +94,7 @@ def column_group(
         for tau in rules.column_lags_s:
             lagged = _scaled(run_lowpass(rs, values, tau))
             columns += [lagged, lagged * xc]
-    return run_lowpass(rs, np.column_stack(columns), base.lag_s)
+    return through_stage(rs, base, np.column_stack(columns))
 
 
 def drift_group(rs: RunSet, base: Baseline, rules: Rules) -> NDArray[np.float64]:

@@ -37,6 +37,26 @@ def run_lowpass(rs: RunSet, x: NDArray[np.float64], tau_s: float) -> NDArray[np.
     return out
 
 
+def run_resonance(rs: RunSet, x: NDArray[np.float64], f_hz: float, zeta: float) -> NDArray[np.float64]:
+    """``x`` through a unit-gain second-order stage ``y'' + 2 zeta w y' + w^2 y = w^2 x``
+    (``w = 2 pi f_hz``; a payload mass on the muscle's stiffness), zero-order hold, settled at
+    each run's first sample (``f_hz`` 0: unchanged)."""
+    if f_hz <= 0:
+        return x
+    from scipy.signal import cont2discrete, lfilter_zi
+
+    w = 2.0 * np.pi * f_hz
+    num, den, _ = cont2discrete(([w * w], [1.0, 2.0 * zeta * w, w * w]), rs.dt, method="zoh")
+    b, a = np.ravel(num), np.ravel(den)
+    zi = lfilter_zi(b, a)
+    out = np.empty_like(x, dtype=np.float64)
+    for lo, hi in rs.bounds():
+        seg = x[lo:hi]
+        start = np.multiply.outer(zi, seg[0]) if seg.ndim > 1 else zi * seg[0]
+        out[lo:hi] = lfilter(b, a, seg, axis=0, zi=start)[0]
+    return out
+
+
 def run_gradient(rs: RunSet, x: NDArray[np.float64]) -> NDArray[np.float64]:
     """Time derivative per run [units / s] (one-sided at each run's ends)."""
     out = np.empty_like(x, dtype=np.float64)
@@ -77,10 +97,16 @@ class Baseline:
     x: NDArray[np.float64]  # the hysteresis output (static, before the lag) [units of y]
     prediction: NDArray[np.float64]  # M0's output on every row [units of y]
     lag_s: float
+    resonance: tuple[float, float] = (0.0, 0.0)  # (f [Hz], zeta) of the second-order stage; f 0: none
 
     @property
     def residual_scale(self) -> float:
         return float(np.std(self.prediction))
+
+
+def through_stage(rs: RunSet, base: Baseline, v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``v`` through the baseline's linear dynamics: its output lag, then its second-order stage."""
+    return run_resonance(rs, run_lowpass(rs, v, base.lag_s), *base.resonance)
 
 
 def fit_baseline(
@@ -90,6 +116,8 @@ def fit_baseline(
     lags_s: tuple[float, ...],
     ridge: float,
     extra_lags_s: tuple[float, ...] = (),
+    resonances_hz: tuple[float, ...] = (),
+    resonance_zetas: tuple[float, ...] = (),
 ) -> Baseline:
     """M0 (see module docstring): masses on the nodes, then the output lag by least squares on
     the lagged hysteresis output, then the masses refitted through that lag (one alternation)."""
@@ -98,31 +126,47 @@ def fit_baseline(
     theta = ridge_fit(np.hstack([nodes, ones]), y, smoothness, ridge)
     x = nodes @ theta[:-1]
 
-    def lag_error(tau: float) -> float:
-        z = np.column_stack([run_lowpass(rs, x, tau), ones])
+    usable = [tau for tau in lags_s if tau == 0 or tau >= 0.5 * rs.dt]
+    # the lag and the second-order stage are chosen together (a lag alone would stand in for a
+    # resonance and leave the stage a wrong one)
+    stages = [(0.0, 0.0)] + [(f, z) for f in resonances_hz if f < 0.2 / rs.dt for z in resonance_zetas]
+    lagged_by = {tau: run_lowpass(rs, x, tau) for tau in usable}
+
+    def stage_error(choice: tuple[float, tuple[float, float]]) -> float:
+        z = np.column_stack([run_resonance(rs, lagged_by[choice[0]], *choice[1]), ones])
         coef = np.linalg.lstsq(z, y, rcond=None)[0]
         return float(np.sum((z @ coef - y) ** 2))
 
-    usable = [tau for tau in lags_s if tau == 0 or tau >= 0.5 * rs.dt]
-    lag = min(usable, key=lag_error)
-    lagged_nodes = run_lowpass(rs, nodes, lag)
+    lag, resonance = min(((tau, fz) for tau in usable for fz in stages), key=stage_error)
+
+    def stage(v: NDArray[np.float64], tau: float = lag, fz: tuple[float, float] = resonance) -> NDArray[np.float64]:
+        return run_resonance(rs, run_lowpass(rs, v, tau), *fz)
+
+    lagged_nodes = stage(nodes)
     theta = ridge_fit(np.hstack([lagged_nodes, ones]), y, smoothness, ridge)
     x = nodes @ theta[:-1]
     xc = (x - x.mean()) / (np.std(x) or 1.0)
-    lagged_x = run_lowpass(rs, x, lag)
-    slower = run_lowpass(rs, x, 1.5 * lag + rs.dt)
-    tangents = np.column_stack(
-        [
-            slower - lagged_x,  # a longer output lag
-            run_lowpass(rs, run_gradient(rs, x), lag) * rs.dt,  # an input lead (snubber on the reading)
-            run_lowpass(rs, xc**2, lag),  # the static output map
-            run_lowpass(rs, xc**3, lag),
-        ]
-        + [run_lowpass(rs, x, tau) - lagged_x for tau in extra_lags_s if tau != lag]
-    )
-    nuisance = np.hstack([lagged_nodes, tangents, ones])
+    lagged_x = stage(x)
+    columns = [
+        stage(x, 1.5 * lag + rs.dt) - lagged_x,  # a longer output lag
+        stage(run_gradient(rs, x)) * rs.dt,  # an input lead (snubber on the reading)
+        stage(xc**2),  # the static output map
+        stage(xc**3),
+    ] + [stage(x, tau) - lagged_x for tau in extra_lags_s if tau != lag]
+    if resonance[0] > 0:  # the stage's own tangents: a stiffer or softer payload, more or less damping
+        f, z = resonance
+        columns += [stage(x, lag, (1.25 * f, z)) - lagged_x, stage(x, lag, (f, z + 0.15)) - lagged_x]
+    nuisance = np.hstack([lagged_nodes, np.column_stack(columns), ones])
     coef = ridge_fit(nuisance, y, smoothness, ridge)
-    return Baseline(nuisance, smoothness, x, nuisance @ coef, lag)
+    return Baseline(nuisance, smoothness, x, nuisance @ coef, lag, resonance)
+
+
+def with_nuisance(rs: RunSet, base: Baseline, extra: NDArray[np.float64], ridge: float) -> Baseline:
+    """``base`` with ``extra`` nuisance columns inserted before its constant, and M0's prediction
+    refitted (the hysteresis output ``x`` and the lag stay those of the Preisach fit)."""
+    nuisance = np.hstack([base.nuisance[:, :-1], extra, base.nuisance[:, -1:]])
+    coef = ridge_fit(nuisance, rs.y, base.smoothness, ridge)
+    return Baseline(nuisance, base.smoothness, base.x, nuisance @ coef, base.lag_s, base.resonance)
 
 
 def ar_whitener(residual: NDArray[np.float64], max_order: int) -> NDArray[np.float64]:

@@ -94,6 +94,10 @@ class Rules:
     # class (3 classes), p resolution 1/(draws+1); 0: off. Off by default: on the tuning subset
     # (every 3rd case, 60 s) it named 2/13 vs 3/13 for one false alarm fewer (1/6 vs 2/6)
     composite_draws: int = 0
+    # the other effect-free classes (generalised PI, Bouc-Wen, the richer-level Preisach) as
+    # nuisance directions of M0 (host/diagnose/composite.class_nuisance): a class difference is
+    # partialled out instead of raising a null's quantile
+    class_nuisance: bool = False
     # surrogate copies of each measured column: p resolution 1/200
     column_surrogates: int = 199
     # a column whose chi-square p exceeds this cannot pass its surrogate test: the surrogates are skipped
@@ -107,6 +111,12 @@ class Rules:
     output_lags_s: tuple[float, ...] = (0.0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0)
     # further output lags [s] whose directions join the nuisance (linear dynamics as a sum of lags)
     nuisance_lags_s: tuple[float, ...] = (0.02, 0.1, 0.5)
+    # a second-order stage after the lag (a payload mass on the muscle's stiffness: y'' + 2 zeta w y'
+    # + w^2 y = w^2 x), chosen with "none" from this grid by least squares like the lag, and its
+    # two tangents in the nuisance; frequencies above a fifth of the sample rate are skipped
+    resonance_nuisance: bool = False
+    resonance_hz: tuple[float, ...] = (0.5, 0.7, 1.0, 1.4, 2.0, 2.8, 4.0, 5.6, 8.0, 11.0, 16.0)
+    resonance_zetas: tuple[float, ...] = (0.15, 0.3, 0.5, 0.7)
     # AR order bound of the residual's noise model (order by BIC)
     max_ar_order: int = 20
     # creep relaxations [s], log grid; only those shorter than half the record (or run) are used
@@ -125,6 +135,11 @@ class Rules:
     # held-out folds: blocks in time (long records) or runs (short runs)
     max_folds: int = 5
     min_fold_samples: int = 100
+    # causes significant beyond the baseline alone (marginal test) are candidates after the
+    # unique passers, each confirmed held out like them
+    marginal_candidates: bool = False
+    # a cause passing its unique test is named only when held-out data confirm it (Clark-West p <= alpha)
+    heldout_gate: bool = True
     # the held-out confirmation also needs the gain's 90 % interval above 0 (beside Clark-West p <= alpha)
     heldout_interval_gate: bool = True
     # a cause whose unique test passes on the full record but fails with the richer baseline is the

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -27,11 +28,11 @@ from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
 from host.data import Measurement
-from host.diagnose.composite import null_classes, simulated_records, unrestricted_residual
+from host.diagnose.composite import class_nuisance, null_classes, simulated_records, unrestricted_residual
 from host.diagnose.conditional import GroupTest, group_tests, whitened
 from host.diagnose.groups import branch_of, cause_groups, column_group
 from host.diagnose.heldout import HeldOut, held_out, holdout_folds
-from host.diagnose.nuisance import Baseline, fit_baseline
+from host.diagnose.nuisance import Baseline, fit_baseline, with_nuisance
 from host.diagnose.rules import CAUSES, RULES, Rules
 from host.diagnose.runs import RunSet, node_differences, preisach_nodes, run_set
 
@@ -105,7 +106,18 @@ def score(
     """Baseline at ``levels`` and every cause's tests."""
     nodes, notes = preisach_nodes(rs, levels)
     smooth = node_differences(levels)
-    base = fit_baseline(rs, nodes, smooth.T @ smooth, rules.output_lags_s, rules.node_ridge, rules.nuisance_lags_s)
+    base = fit_baseline(
+        rs,
+        nodes,
+        smooth.T @ smooth,
+        rules.output_lags_s,
+        rules.node_ridge,
+        rules.nuisance_lags_s,
+        rules.resonance_hz if rules.resonance_nuisance else (),
+        rules.resonance_zetas,
+    )
+    if rules.class_nuisance:
+        base = with_nuisance(rs, base, class_nuisance(rs, base, rules), rules.node_ridge)
     groups = cause_groups(rs, base, rules)
     w = whitened(rs, base, rules)
     branch = branch_of(rs)
@@ -125,17 +137,69 @@ def score(
     return base, groups, tests, notes
 
 
-def decide(tests: dict[str, GroupTest]) -> tuple[list[str], list[str]]:
+def decide(tests: dict[str, GroupTest], rules: Rules = RULES) -> tuple[list[str], list[str]]:
     """(candidates, cannot_tell): the causes whose unique test passes at their level, the largest
-    unique share first (a physical cause before ``slow_drift``); or, when none does, the one cause
-    significant beyond the baseline alone; else those significant only jointly (cannot tell)."""
+    unique share first (a physical cause before ``slow_drift``); with ``rules.marginal_candidates``
+    they are followed by the causes significant beyond the baseline alone (largest marginal
+    statistic per degree of freedom first): groups overlap, so a real effect's unique part can
+    vanish into a rival's directions, and the held-out confirmation then tells which one
+    predicts. Without it, when no unique test passes, the one cause significant beyond the
+    baseline alone; else those significant only jointly (cannot tell)."""
     unique = [g for g, t in tests.items() if t.unique_p <= t.level]
-    if unique:
-        return sorted(unique, key=lambda g: (g == "slow_drift", -tests[g].unique_share)), []
+    ranked = sorted(unique, key=lambda g: (g == "slow_drift", -tests[g].unique_share))
     joint = [g for g, t in tests.items() if t.marginal_p <= t.level]
+    if rules.marginal_candidates:
+        rest = [g for g in joint if g not in unique]
+        ranked += sorted(rest, key=lambda g: (g == "slow_drift", -tests[g].marginal_stat / max(tests[g].df, 1)))
+        return ranked, [] if unique or len(rest) < 2 else sorted(rest, key=lambda g: tests[g].marginal_p)
+    if unique:
+        return ranked, []
     if len(joint) == 1:
         return joint, []
     return [], sorted(joint, key=lambda g: tests[g].marginal_p)
+
+
+@dataclass
+class Choice:
+    """What :func:`choose` decided from the tests, the ladder and the held-out trials."""
+
+    cause: str
+    rejected: list[str]
+    class_mismatch: bool
+    not_confirmed: bool
+    heldout_of: str | None  # whose held-out trial the verdict reports
+
+
+def choose(
+    ranked: list[str],
+    tests: dict[str, GroupTest],
+    richer_tests: Callable[[], dict[str, GroupTest]],
+    trial: Callable[[str], HeldOut],
+    rules: Rules,
+) -> Choice:
+    """The first of ``ranked`` (causes whose unique test passed) that survives the robustness
+    ladder (when ``rules.ladder_drop`` < 1) and the held-out confirmation (when
+    ``rules.heldout_gate``). ``richer_tests()`` and ``trial(cause)`` compute on demand, so the
+    same rules replay from a dump (``bench/diagnose_replay.py --v3``) without refits."""
+    cause, class_mismatch, not_confirmed = "none", False, False
+    rejected: list[str] = []
+    heldout_of: str | None = None
+    for candidate in ranked:  # the largest unique share first; the first confirmed is named
+        if CAUSES[candidate].kind == "dynamic" and rules.ladder_drop < 1.0:
+            r = richer_tests()[candidate]
+            if r.unique_p > r.level and r.unique_stat < (1 - rules.ladder_drop) * tests[candidate].unique_stat:
+                class_mismatch = class_mismatch or not rejected
+                rejected.append(candidate)
+                continue
+        h = trial(candidate)
+        # nested confirmation: the extension must predict rows it was not fitted on
+        confirmed = h.clark_west_p <= rules.alpha and (h.interval[0] > 0.0 or not rules.heldout_interval_gate)
+        if confirmed or not rules.heldout_gate:
+            return Choice(candidate, rejected, False, False, candidate)
+        if not rejected:
+            heldout_of, not_confirmed = candidate, True
+        rejected.append(candidate)
+    return Choice(cause, rejected, class_mismatch, not_confirmed, heldout_of)
 
 
 def diagnose_runs(
@@ -148,26 +212,21 @@ def diagnose_runs(
     with threadpool_limits(limits=threads):
         _say(progress, f"diagnose v3: {rs.n_runs} run(s), {rs.y.size} samples: baseline and tests ...")
         base, groups, tests, notes = score(rs, rules.preisach_levels, rules, seed)
-        ranked, cannot_tell = decide(tests)
+        ranked, cannot_tell = decide(tests, rules)
         masks, holdout = holdout_folds(rs, rules)
-        richer: dict[str, GroupTest] | None = None
-        cause, class_mismatch, not_confirmed = "none", False, False
-        result_heldout: HeldOut | None = None
-        rejected: list[str] = []
+        richer: dict[str, GroupTest] = {}
         trials: dict[str, HeldOut] = {}
-        for candidate in ranked:  # the largest unique share first; the first confirmed is named
-            if CAUSES[candidate].kind == "dynamic":
-                if richer is None:
-                    _say(progress, "diagnose v3: checking the dynamic causes against a richer baseline ...")
-                    richer = score(rs, rules.richer_levels, replace(rules, composite_draws=0), seed + 1)[2]
-                r = richer[candidate]
-                if r.unique_p > r.level and r.unique_stat < (1 - rules.ladder_drop) * tests[candidate].unique_stat:
-                    class_mismatch = class_mismatch or not rejected
-                    rejected.append(candidate)
-                    continue
+
+        def richer_tests() -> dict[str, GroupTest]:
+            if not richer:
+                _say(progress, "diagnose v3: checking the dynamic causes against a richer baseline ...")
+                richer.update(score(rs, rules.richer_levels, replace(rules, composite_draws=0), seed + 1)[2])
+            return richer
+
+        def trial(candidate: str) -> HeldOut:
             _say(progress, f"diagnose v3: held-out gain of {candidate} over {len(masks)} folds ...")
             column = CAUSES[candidate].column
-            trial = held_out(
+            trials[candidate] = held_out(
                 rs,
                 base.nuisance,
                 base.smoothness,
@@ -177,14 +236,16 @@ def diagnose_runs(
                 np.random.default_rng(seed),
                 rs.columns.get(column) if column else None,
             )
-            trials[candidate] = trial
-            # nested confirmation: the extension must predict rows it was not fitted on
-            if trial.clark_west_p <= rules.alpha and (trial.interval[0] > 0.0 or not rules.heldout_interval_gate):
-                cause, result_heldout, class_mismatch, not_confirmed = candidate, trial, False, False
-                break
-            if not rejected:
-                result_heldout, not_confirmed = trial, True
-            rejected.append(candidate)
+            return trials[candidate]
+
+        choice = choose(ranked, tests, richer_tests, trial, rules)
+        cause, class_mismatch, not_confirmed, rejected = (
+            choice.cause,
+            choice.class_mismatch,
+            choice.not_confirmed,
+            choice.rejected,
+        )
+        result_heldout = trials.get(choice.heldout_of) if choice.heldout_of else None
     also = [g for g in ranked if g != cause and g not in rejected] if cause != "none" else []
     first = rejected[0] if rejected else "none"
     out = DiagnosisV3(

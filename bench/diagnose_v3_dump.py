@@ -1,0 +1,185 @@
+"""Dump everything a v3 decision needs, per record, so that decision rules replay in seconds.
+
+Usage: python bench/diagnose_v3_dump.py OUT.jsonl [--set tuning,fresh] [--duration S] [--every K]
+       [--rules field=value,...]
+
+For every K-th case of each family (effect-free records in the same stride) it fits the baseline
+and scores every cause (:func:`host.diagnose.v3.score`) with the rules given, and writes one JSON
+line: per cause the unique and marginal statistic, df, level and p under each null separately;
+the richer rung's unique statistic and p (the robustness ladder); the held-out comparison of
+*every* cause (Clark-West p, the gain and its 90 % interval), not only the ones the live rules
+reach; the oracle's p (the true noise-free effect waveform as one regressor beyond the baseline,
+whitened, block-bootstrap calibrated; families that simulate their cases); and the live verdict.
+``python bench/diagnose_replay.py --v3 OUT.jsonl`` then decides every record again under any
+:class:`host.diagnose.rules.Rules` overrides, without refitting. A change to the nuisance, the
+groups or a null needs a new dump (pass the same ``--rules`` here).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+from dataclasses import fields, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from bench.plants import engine  # noqa: E402
+from bench.plants.families import FAMILIES, family_names  # noqa: E402
+from bench.plants.registry import specs  # noqa: E402
+from host.data import Measurement  # noqa: E402
+from host.diagnose.conditional import (  # noqa: E402
+    GroupTest,
+    block_length,
+    orthonormal,
+    stationary_draws,
+    whitened,
+)
+from host.diagnose.heldout import HeldOut, held_out, holdout_folds  # noqa: E402
+from host.diagnose.rules import CAUSES, RULES, Rules  # noqa: E402
+from host.diagnose.runs import run_set  # noqa: E402
+from host.diagnose.v3 import choose, decide, score  # noqa: E402
+
+
+def overridden(text: str, rules: Rules = RULES) -> Rules:
+    """``rules`` with ``field=value`` overrides (comma-separated; bools as true/false, tuples
+    not supported); ValueError naming an unknown field."""
+    known = {f.name: f for f in fields(Rules)}
+    changes: dict[str, Any] = {}
+    for item in filter(None, text.split(",")):
+        key, _, raw = item.partition("=")
+        if key not in known or key in ("extra", "version"):
+            raise ValueError(f"--rules: unknown field {key!r}; use some of {', '.join(sorted(known))}")
+        current = getattr(rules, key)
+        if isinstance(current, bool):
+            changes[key] = raw.lower() in ("1", "true", "yes", "on")
+        elif isinstance(current, int):
+            changes[key] = int(raw)
+        elif isinstance(current, float):
+            changes[key] = float(raw)
+        else:
+            raise ValueError(f"--rules: {key} is not a number or a flag")
+    return replace(rules, **changes)
+
+
+def oracle_p(rs_wave: np.ndarray, w: Any) -> float:
+    """Block-bootstrap p of the true effect waveform as one regressor beyond the baseline."""
+    u = orthonormal(w.prepare(rs_wave[:, None]))
+    e = w.residual
+    stat = float(np.sum((u.T @ e) ** 2))
+    draws = e[stationary_draws(e.size, block_length(e), 199, np.random.default_rng(0))]
+    null = np.sum((u.T @ draws) ** 2, axis=0) * (e @ e / e.size) / np.mean(draws**2, axis=0)
+    return float((1 + np.sum(null >= stat)) / 200)
+
+
+def _trial_json(h: HeldOut) -> dict[str, float]:
+    return {
+        "cw_p": round(h.clark_west_p, 6),
+        "lo": round(h.interval[0], 4),
+        "hi": round(h.interval[1], 4),
+        "gain": round(h.gain, 4),
+    }
+
+
+def _richer_json(t: GroupTest) -> dict[str, float]:
+    return {"unique_stat": round(t.unique_stat, 4), "unique_p": round(t.unique_p, 6), "level": t.level}
+
+
+def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int = 0) -> dict[str, Any]:
+    """Every input of a v3 decision on one record (see module docstring)."""
+    rs = run_set([m], rules.max_rows, rules.min_samples)
+    base, groups, tests, _ = score(rs, rules.preisach_levels, rules, seed)
+    richer = score(rs, rules.richer_levels, replace(rules, composite_draws=0), seed + 1)[2]
+    masks, _ = holdout_folds(rs, rules)
+    trials = {}
+    for g in groups:
+        column = CAUSES[g].column
+        trials[g] = held_out(
+            rs,
+            base.nuisance,
+            base.smoothness,
+            groups[g],
+            masks,
+            rules.node_ridge,
+            np.random.default_rng(seed),
+            rs.columns.get(column) if column else None,
+        )
+    ranked, cannot_tell = decide(tests, rules)
+    choice = choose(ranked, tests, lambda: richer, trials.__getitem__, rules)
+    oracle = None
+    if wave is not None:
+        w = whitened(rs, base, rules)
+        wave_rs = run_set([Measurement(m.t, m.u, wave, {}, m.source)], rules.max_rows, rules.min_samples).y
+        oracle = oracle_p(wave_rs, w)
+    return {
+        "verdict": choice.cause,
+        "cannot_tell": cannot_tell,
+        "tests": {g: t.as_json() for g, t in tests.items()},
+        "richer": {g: _richer_json(t) for g, t in richer.items()},
+        "trials": {g: _trial_json(h) for g, h in trials.items()},
+        "oracle_p": oracle,
+        "baseline_columns": int(base.nuisance.shape[1]),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("out", type=Path)
+    parser.add_argument("--set", default="tuning,fresh")
+    parser.add_argument("--duration", type=float, default=60.0, metavar="S")
+    parser.add_argument("--every", type=int, default=3, metavar="K")
+    parser.add_argument("--rules", default="", help="Rules overrides, e.g. class_nuisance=true,ladder_drop=1")
+    args = parser.parse_args(argv)
+    try:
+        rules = overridden(args.rules)
+        names = family_names(args.set)
+    except ValueError as e:
+        parser.error(str(e))
+    registry = specs()
+    with args.out.open("w") as out:
+        for family in names:
+            cases_of, record = FAMILIES[family]
+            for index, case in list(enumerate(cases_of(args.duration)))[:: args.every]:
+                wall, cpu = time.perf_counter(), time.process_time()
+                m, _ = record(case)
+                wave = None
+                if case.effect != "none":
+                    try:
+                        sim = engine.simulate(registry[family], case)
+                        wave = np.asarray(sim["on"] - sim["off"], dtype=np.float64)
+                        wave = wave if wave.size == m.y.size else None
+                    except (TypeError, KeyError):
+                        wave = None
+                with warnings.catch_warnings(), threadpool_limits(limits=1):
+                    warnings.simplefilter("ignore")
+                    row = dump_record(m, wave, rules)
+                row = {
+                    "family": family,
+                    "index": index,
+                    "case": case.name,
+                    "effect": case.effect,
+                    "v3": True,
+                    "rules": args.rules,
+                    **row,
+                    "cpu_s": round(time.process_time() - cpu, 2),
+                    "wall_s": round(time.perf_counter() - wall, 2),
+                }
+                out.write(json.dumps(row) + "\n")
+                out.flush()
+                print(
+                    f"{family}/{index:03d} {case.name:<60} -> {row['verdict']:<18} cpu {row['cpu_s']:5.1f}s",
+                    file=sys.stderr,
+                    flush=True,
+                )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
