@@ -26,15 +26,15 @@ on the campaign laid end to end as one record, as a user with one file would giv
 The table prints the count per source, shape and method, the wall and CPU time. Target (issue 33):
 at most 1 in 10.
 
-``--surrogates reflected`` runs v3 with the column surrogates proposed for
-``host.diagnose.conditional.column_copies`` (:func:`reflected_copies`, swapped in here only; that
-module belongs to the v3 statistics): circular shifts of the column *reflected at its ends*, so a
-smooth column's copies are as smooth as it is (a plain circular shift of a ramp or a slow sine
-puts a jump at the wrap, which no smooth misfit in time correlates with, so the real column beats
-its copies). ``--column-vs-drift`` (a second proposal, for ``host.diagnose.v3.diagnose_runs``): a column
-cause is confirmed held out against the baseline *plus smooth functions of the campaign clock*
-(the hat functions of the drift group), so a column is named only when it predicts held-out
-blocks better than a smooth trend in time does (:func:`held_out_beyond_drift`).
+v3's column surrogates (``host.diagnose.conditional.column_copies``) are circular shifts of the
+column *reflected at its ends*, so a smooth column's copies are as smooth as it is; ``--surrogates
+plain`` swaps in the plain circular shifts used before (:func:`plain_copies`): they put a jump at
+the wrap of a ramp or a slow sine, which no smooth misfit in time correlates with, so the real
+column beat its copies and slow decoys were named. ``--column-vs-drift`` (a second proposal, for
+``host.diagnose.v3.diagnose_runs``): a column cause is confirmed held out against the baseline
+*plus smooth functions of the campaign clock* (the hat functions of the drift group), so a column
+is named only when it predicts held-out blocks better than a smooth trend in time does
+(:func:`held_out_beyond_drift`).
 ``--inject SHARE``: the temperature is made real, ``y`` gets ``SHARE`` x its p-p x
 the scaled column (the power check: a real temperature effect must still be named).
 """
@@ -108,23 +108,21 @@ SHAPES: dict[str, Callable[[NDArray[np.float64], np.random.Generator], NDArray[n
 }
 
 
-def reflected_copies(
+def plain_copies(
     rs: object, values: NDArray[np.float64], count: int, rng: np.random.Generator
 ) -> tuple[list[NDArray[np.float64]], str]:
-    """Surrogates of a column (the proposal for ``column_copies``): per-run values permuted across
-    runs when constant within every run and >= 4 runs (as now); otherwise windows of the series
-    followed by its mirror image (periodic, continuous at every join), starting 10-90 % of the
-    way around, so each copy keeps the column's smoothness and spectrum with no jump."""
+    """The column surrogates v3 used before reflected shifts (for comparison): per-run values
+    permuted across runs when constant within every run and >= 4 runs (as now); otherwise the
+    series circularly shifted by 10-90 % of its length, half of the copies mirrored in time."""
     copies, kind = CURRENT_COPIES(rs, values, count, rng)  # type: ignore[arg-type]
     if kind.startswith("its per-run values"):
         return copies, kind
     n = values.size
-    loop = np.concatenate([values, values[::-1]])
     out = []
-    for _ in range(count):
-        start = int(rng.integers(int(0.1 * 2 * n), int(0.9 * 2 * n)))
-        out.append(np.take(loop, np.arange(start, start + n), mode="wrap"))
-    return out, "reflected circular shifts (smooth as the column)"
+    for i in range(count):
+        copy = np.roll(values, int(rng.integers(int(0.1 * n), max(int(0.9 * n), int(0.1 * n) + 1))))
+        out.append(copy[::-1].copy() if i % 2 else copy)
+    return out, "circularly shifted and mirrored copies"
 
 
 def held_out_beyond_drift(
@@ -228,7 +226,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--methods", default="v2,v3,v3-1", help="v2, v3, v3-1 (default: all three)")
     parser.add_argument("--only", default="", help="sources whose name contains this (e.g. 31-03)")
     parser.add_argument("--shapes", default=",".join(SHAPES), help="decoy shapes (default: all)")
-    parser.add_argument("--surrogates", choices=("current", "reflected"), default="current")
+    parser.add_argument("--surrogates", choices=("current", "plain"), default="current")
     parser.add_argument("--column-vs-drift", action="store_true", help="the second proposal (module docstring)")
     parser.add_argument("--inject", type=float, default=0.0, help="a real temperature effect (share of y's p-p)")
     args = parser.parse_args(argv)
@@ -242,10 +240,10 @@ def main(argv: list[str] | None = None) -> int:
         sources.update(real)
     sources = {k: v for k, v in sources.items() if args.only in k}
     methods = args.methods.split(",")
-    if args.surrogates == "reflected":
+    if args.surrogates == "plain":
         import host.diagnose.conditional as conditional
 
-        conditional.column_copies = reflected_copies  # type: ignore[assignment]
+        conditional.column_copies = plain_copies  # type: ignore[assignment]
     if args.column_vs_drift:
         import host.diagnose.v3 as v3
 

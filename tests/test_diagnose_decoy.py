@@ -50,18 +50,12 @@ def test_an_untouched_muscle_campaign_of_runs_with_a_decoy_temperature_does_not_
     assert "temperature_drift" not in causes, causes
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="v3 names a slow decoy (bench/diagnose_decoy.py: 4/6 on the 31-03 runs, 3/6 on 18-03 as one file): "
-    "the column's circularly shifted copies jump at the wrap, the column does not. The proposed fix, reflected "
-    "shifts in host/diagnose/conditional.column_copies (not this branch's file), is measured by "
-    "bench/diagnose_decoy.py --surrogates reflected. Remove this mark with that fix.",
-)
 @pytest.mark.parametrize(
     "campaign, one_file, shape, seed",
     [(CAMPAIGNS[1], False, "sine", 0), (CAMPAIGNS[0], True, "ramp_sine", 1)],
     ids=["31-03 runs", "18-03 one file"],
 )
 def test_a_slow_decoy_temperature_on_an_untouched_campaign_is_not_named(shared_data, campaign, one_file, shape, seed):
+    """Plain circular shifts of the column named these two (their copies jump at the wrap)."""
     decoyed = with_decoy(_campaign(shared_data, campaign), shape, seed)
     assert diagnose_runs([end_to_end(decoyed)] if one_file else decoyed).cause != "temperature_drift"
