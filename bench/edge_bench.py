@@ -13,6 +13,8 @@ Usage: python bench/edge_bench.py [--seconds 60] [--skip-realtime] [--before DIR
    CPU clock calls cost time themselves), and the same runs of the pre-v2 runtime when its
    source is given (``--before DIR``, e.g. ``git archive 4df3193 | tar -x -C DIR``) so the
    ratio comes from one process on one loaded machine.
+1b. ``--only-twin N``: the whole-tick compute with the forward twin on (the default), off (the
+   table-only tick) and with ``[adapt]``, N repeats, wall beside CPU, ratios to table-only.
 2. Lateness of a real-time 1 kHz run (``--seconds``) over the serial DAQ protocol on a pty, the
    HIL in its own process (``pmactl hil serve``): median, p99, p99.9, max, overruns per 1e4
    ticks, with and without SCHED_FIFO.
@@ -79,17 +81,26 @@ def make_bundle(root: Path) -> Path:
     return bundle
 
 
-def profiled_run(bundle: Path, seconds: float, timed: bool, profile: bool | str = True, nn: bool = True):
+def profiled_run(
+    bundle: Path,
+    seconds: float,
+    timed: bool,
+    profile: bool | str = True,
+    nn: bool = True,
+    twin: bool = True,
+    adapt: bool = False,
+):
     """A lockstep run with per-phase timing; ``timed`` also wraps inverse, NN and PID."""
     n = int(seconds * 1000)
     with tempfile.TemporaryDirectory() as tmp:
         edge = EdgeRuntime(
-            rig_config(),
+            rig_config(adapt={"enabled": adapt}),
             load_bundle(bundle),
             parse_reference("sine:amplitude=30,frequency=0.2,offset=40"),
             telemetry_path=Path(tmp) / "t.pmt",
             profile=profile,
             use_correction=nn,
+            twin=twin,
         )
         if timed:
             controller = edge.controller
@@ -122,14 +133,16 @@ def breakdown(bundle: Path, seconds: float = 20.0) -> None:
         print(f"{name:<34} {np.median(values):8.2f} {np.percentile(values, 99):8.2f}")
 
 
-def whole_tick(bundle: Path, seconds: float, nn: bool, repeats: int) -> list[tuple[float, float, float, float, float]]:
+def whole_tick(
+    bundle: Path, seconds: float, nn: bool, repeats: int, **variant: bool
+) -> list[tuple[float, float, float, float, float]]:
     """(wall median, wall p99, CPU median, CPU p99 [us], run CPU / wall) of each repeat."""
     rows = []
     for _ in range(repeats):
-        edge, summary = profiled_run(bundle, seconds, timed=False, profile=True, nn=nn)
+        edge, summary = profiled_run(bundle, seconds, timed=False, profile=True, nn=nn, **variant)
         phases = edge.phase_ns[: summary["ticks"]] / 1e3
         wall = phases[:, PHASES.index("control")] + phases[:, PHASES.index("log")]
-        edge, cpu_summary = profiled_run(bundle, seconds, timed=False, profile="cpu", nn=nn)
+        edge, cpu_summary = profiled_run(bundle, seconds, timed=False, profile="cpu", nn=nn, **variant)
         cpu = edge.phase_ns[: cpu_summary["ticks"], PHASES.index("cpu")] / 1e3
         share = summary["run_cpu_s"] / summary["run_wall_s"]
         rows.append((np.median(wall), np.percentile(wall, 99), np.median(cpu), np.percentile(cpu, 99), share))
@@ -345,6 +358,24 @@ def c_loop(fifo: bool, ticks: int = 10_000) -> tuple[int, int] | None:
     return int(overruns), int(worst)
 
 
+TWIN_VARIANTS = {"table only (no twin)": {"twin": False}, "+ twin": {}, "+ twin + [adapt]": {"adapt": True}}
+
+
+def twin_table(bundle: Path, seconds: float, repeats: int) -> None:
+    """Whole-tick compute with the forward twin off, on, and with adaptation (rows interleaved)."""
+    print(f"\nWhole-tick compute with the forward twin, {seconds:g} s lockstep runs x {repeats} (us per tick)")
+    print(f"{'tick':<28} {'wall med':>8} {'wall p99':>8} {'CPU med':>8} {'CPU p99':>8} {'CPU/wall':>8}")
+    rows: dict[str, list] = {name: [] for name in TWIN_VARIANTS}
+    for _ in range(repeats):  # interleaved, so a busy spell of the machine hits every variant
+        for name, variant in TWIN_VARIANTS.items():
+            rows[name] += whole_tick(bundle, seconds, False, 1, **variant)
+    base = np.median([r[2] for r in rows["table only (no twin)"]])
+    for name, values in rows.items():
+        for row in values:
+            print(f"{name:<28} {row[0]:8.2f} {row[1]:8.2f} {row[2]:8.2f} {row[3]:8.2f} {row[4]:8.2f}")
+        print(f"{'':<28} CPU median / table only: {np.median([r[2] for r in values]) / base:.2f}x")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0, help="length of each real-time run")
@@ -357,6 +388,7 @@ def main() -> None:
         "--only-rig-commands", type=int, metavar="N", help="only the run/record/probe table, N repeats (0: skip it)"
     )
     parser.add_argument("--only-live", type=int, metavar="N", help="only the with/without --live table, N repeats")
+    parser.add_argument("--only-twin", type=int, metavar="N", help="only the forward-twin tick table, N repeats")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         bundle = make_bundle(Path(tmp))
@@ -366,6 +398,9 @@ def main() -> None:
             return
         if args.only_live:
             live_table(bundle, args.rig_seconds, args.only_live)
+            return
+        if args.only_twin:
+            twin_table(bundle, args.compute_seconds, args.only_twin)
             return
         breakdown(bundle)
         compute_table(bundle, args.compute_seconds, args.repeats, args.before)

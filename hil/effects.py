@@ -15,7 +15,9 @@ import numpy as np
 
 from hil.plant import PlantParams, Schedule, TemperatureProfile
 
-EFFECTS = ("none", "rate_dependence", "creep", "transport_delay", "load_dependence", "temperature_drift")
+EFFECTS = (
+    "none", "rate_dependence", "creep", "transport_delay", "load_dependence", "temperature_drift", "session_shift",
+)  # fmt: skip
 
 SEED_000_LOADS_KG = (0.0, 1.5, 3.5, 5.5, 7.5)
 
@@ -35,6 +37,12 @@ EFFECT_RANGES: dict[str, dict[str, tuple[float, float]]] = {
         "elastic_softening_per_k": (0.003, 0.010),
         "friction_softening_per_k": (0.005, 0.02),
     },
+    # the muscle of another session: the chamber pressure that makes force is gain * p - offset
+    # of the transducer's. Sized on the real muscle (data/pam_muscle_sensory, 18-03 vs 31-03, a PI
+    # model per series of 18-03 mapped onto 31-03's same series, 19 series): y_31 ~ a + b y_model
+    # with median a = +4.1 % of p-p, b = 0.93 (same day, P001 vs P003: +0.5 %, 1.000). The middle
+    # of these ranges gives a = +4.8 % of the span, b = 0.92 on this muscle's triangles.
+    "session_shift": {"muscle_pressure_gain": (0.90, 0.97), "muscle_pressure_offset_bar": (-0.15, -0.03)},
 }
 
 
@@ -58,6 +66,12 @@ def apply_effect(
     elif name == "creep":
         params = replace(
             params, creep_fraction=values["creep_fraction"], creep_time_constant_s=values["creep_time_constant_s"]
+        )
+    elif name == "session_shift":
+        params = replace(
+            params,
+            muscle_pressure_gain=values["muscle_pressure_gain"],
+            muscle_pressure_offset_bar=values["muscle_pressure_offset_bar"],
         )
     elif name == "transport_delay":
         params = replace(params, dead_time_s=values["dead_time_s"])

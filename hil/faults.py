@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from edge.errors import ConfigError
 from hil.rig import HilRig
 
+LEAK_PRESSURE_GAIN = 0.8  # a leak orifice against the line's restriction: the muscle keeps 80 %
 FAULT_KINDS = {
     "estop": "the e-stop is pressed",
     "dac_nack": "the valve DAC stops acknowledging (every write fails)",
@@ -25,8 +26,13 @@ FAULT_KINDS = {
     "sensor_saturated": "the sensor is driven past the ADC's full scale",
     "sensor_stuck": "the sensor voltage freezes (found once the command has swept 0.5 bar)",
     "pressure_high": "the pressure transducer reads the supply rail (overpressure)",
+    "sensor_detached": "the position sensor slips off the muscle: it reads where it was, with its noise",
+    "leak": f"the muscle leaks: it holds {LEAK_PRESSURE_GAIN:.0%} of the pressure the transducer reads at the valve",
 }
 SENSORS = ("contraction", "pressure")
+# no range or stuck check sees these (the reading stays plausible): the forward twin warns
+# (edge.control.twin), or trips with [safety] twin_mismatch_mm
+TWIN_WATCHED_KINDS = ("sensor_detached", "leak")
 
 
 @dataclass(frozen=True)
@@ -103,5 +109,7 @@ class FaultSchedule:
             "sensor_saturated": lambda: rig.fail_sensor(self._channel(fault.sensor), "saturated"),
             "sensor_stuck": lambda: rig.fail_sensor(self._channel(fault.sensor), "stuck"),
             "pressure_high": lambda: rig.fail_sensor(self._channel("pressure"), "disconnected"),
+            "sensor_detached": lambda: rig.fail_sensor(self._channel(fault.sensor), "detached"),
+            "leak": lambda: rig.leak(LEAK_PRESSURE_GAIN),
         }
         actions[kind]()

@@ -93,6 +93,11 @@ class PlantParams:
     reference_temperature_c: float = 22.0
     elastic_softening_per_k: float = 0.0  # relative fall of tondu_b per kelvin
     friction_softening_per_k: float = 0.0  # relative fall of the slip break forces per kelvin
+    # the chamber pressure that makes force is gain * p - offset of the p the transducer reads: a
+    # leak downstream of the line's restriction (gain < 1, the muscle holds less than the valve
+    # outlet), or a session shift of the pressure-contraction map (hil.effects "session_shift")
+    muscle_pressure_gain: float = 1.0
+    muscle_pressure_offset_bar: float = 0.0
 
     @property
     def delay_steps(self) -> int:
@@ -192,7 +197,8 @@ def _balance(params: PlantParams, t: float, x: PlantState, pressure_bar: float, 
     limits = [soften * f / k for f, k in zip(params.slip_break_force_n, stiffness)]
     x_prev, slips = x.contraction_m, x.slips_m
     viscous = damping / params.dt_s
-    area_pa = math.pi * params.radius_m**2 * pressure_bar * 1e5
+    acting_bar = max(params.muscle_pressure_gain * pressure_bar - params.muscle_pressure_offset_bar, 0.0)
+    area_pa = math.pi * params.radius_m**2 * acting_bar * 1e5
     b = params.tondu_b * (1.0 - params.elastic_softening_per_k * (temperature - params.reference_temperature_c))
     a, k_shorten, length = params.tondu_a, params.tondu_k, params.rest_length_m
     lo, hi = -0.1 * length, 0.6 / k_shorten * length

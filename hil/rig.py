@@ -13,8 +13,9 @@ that held over that interval. With a :class:`~hil.clock.SimClock` that is lockst
 deterministic); with the wall clock it is real time.
 
 Faults: sensors stuck (voltage frozen), saturated (driven past full scale), disconnected (pulled
-to the supply rail); valve stuck (ignores new commands); supply pressure drop; plus the bus's
-wire faults (:class:`~hil.devices.bus.WireFaults`).
+to the supply rail), detached (off the muscle: the value where it came off, plus noise); a leak
+(the muscle holds a share of the measured pressure); valve stuck (ignores new commands); supply
+pressure drop; plus the bus's wire faults (:class:`~hil.devices.bus.WireFaults`).
 """
 
 from __future__ import annotations
@@ -91,10 +92,12 @@ def valve_command_bar(dac_volts: float, bar_per_volt: float = DEFAULT_WIRING.val
 
 @dataclass
 class RigFaults:
-    """Faults at the sensors and the valve. Sensor modes: None, stuck, saturated, disconnected."""
+    """Faults at the sensors and the valve. Sensor modes: None, stuck, saturated, disconnected,
+    detached (``detached_at`` keeps the value where it came off)."""
 
     sensors: dict[int, str | None] = field(default_factory=lambda: {PRESSURE_CHANNEL: None, DISPLACEMENT_CHANNEL: None})
     stuck_volts: dict[int, float] = field(default_factory=dict)
+    detached_at: dict[int, float] = field(default_factory=dict)
     valve_stuck_bar: float | None = None
 
 
@@ -170,6 +173,10 @@ class HilRig:
             return ADC_VDD + 0.3
         if mode == "disconnected":
             return ADC_VDD  # pulled up to the rail
+        if mode == "detached":
+            sensor = self.wiring.sensors[channel]
+            value = self.faults.detached_at.setdefault(channel, getattr(self.outputs(), sensor.quantity))
+            return sensor.volts(value + self._rng.normal(0.0, NOISE.get(sensor.quantity, 0.0)))
         return self._sensor_volts(channel)
 
     def _sensor_volts(self, channel: int) -> float:
@@ -181,11 +188,14 @@ class HilRig:
 
     # fault switches -------------------------------------------------------------------------
     def fail_sensor(self, channel: int, mode: str | None) -> None:
-        """``mode``: None (healthy), ``stuck``, ``saturated``, ``disconnected``."""
-        if mode not in (None, "stuck", "saturated", "disconnected"):
+        """``mode``: None (healthy), ``stuck``, ``saturated``, ``disconnected``, ``detached``."""
+        if mode not in (None, "stuck", "saturated", "disconnected", "detached"):
             raise ValueError(f"sensor fault {mode!r} unknown")
+        if mode == "detached" and channel not in self.wiring.sensors:
+            raise ValueError(f"no sensor is wired on ADC input {channel}")
         self.faults.sensors[channel] = mode
         self.faults.stuck_volts.pop(channel, None)
+        self.faults.detached_at.pop(channel, None)
 
     def stick_valve(self, stuck: bool = True) -> None:
         """The valve keeps its present command until released."""
@@ -195,6 +205,11 @@ class HilRig:
     def drop_supply(self, supply_bar: float) -> None:
         self.sync()
         self.params = replace(self.params, supply_bar=supply_bar)
+
+    def leak(self, pressure_gain: float) -> None:
+        """From now the muscle holds ``pressure_gain`` of the pressure the transducer reads."""
+        self.sync()
+        self.params = replace(self.params, muscle_pressure_gain=pressure_gain)
 
     def press_estop(self, pressed: bool = True) -> None:
         self.gpio.drive_input("estop", pressed)

@@ -4,7 +4,11 @@ time and readings, with no I/O and no clock.
 Structure (Ai2019 Fig 12, Schreiber eq 8): the desired trajectory goes through the inverse
 hysteresis model (feedforward, a lookup table), an optional neural correction (ONNX, see
 :mod:`edge.control.neural`) is added, then PID feedback on the measured output, then limits:
-pressure range and slew rate. :meth:`Controller.fill` works on the frame
+pressure range and slew rate. With a forward twin (:mod:`edge.control.twin`) the controller
+also predicts the contraction from the applied pressure (``twin_mm``, ``twin_residual_mm``);
+with online adaptation (:mod:`edge.control.adapt`) it estimates the offset ``a`` and gain
+``b`` of the model's output map from that prediction and asks the inverse for ``(r - a) / b``
+(``adapt_offset_mm``, ``adapt_gain``). :meth:`Controller.fill` works on the frame
 (:mod:`edge.runtime.frame`); :meth:`Controller.tick` is the same law on plain values, for
 tests and tools that have no frame.
 """
@@ -16,7 +20,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from edge.control.adapt import OutputMapEstimator
 from edge.control.pid import PID, PIDGains
+from edge.control.twin import ForwardModel
 from edge.hysteresis.lut import CompiledModel
 
 
@@ -47,6 +53,7 @@ class ScratchFrame:
     __slots__ = (
         "t", "lateness_us", "reference_mm", "u_ff_bar", "u_nn_bar", "u_fb_bar", "u_bar",
         "contraction_mm", "pressure_bar", "estop", "valve_enable", "state", "fault",
+        "twin_mm", "twin_residual_mm", "adapt_offset_mm", "adapt_gain",
     )  # fmt: skip
 
     def __init__(self, t: float = 0.0, contraction_mm: float = math.nan, pressure_bar: float = math.nan) -> None:
@@ -54,6 +61,7 @@ class ScratchFrame:
         self.reference_mm = self.u_ff_bar = self.u_nn_bar = self.u_fb_bar = self.u_bar = 0.0
         self.contraction_mm, self.pressure_bar = contraction_mm, pressure_bar
         self.estop, self.valve_enable, self.state, self.fault = 0.0, 0.0, 0, 0
+        self.twin_mm = self.twin_residual_mm = self.adapt_offset_mm = self.adapt_gain = math.nan
 
 
 class InverseModel(Protocol):
@@ -94,6 +102,8 @@ class Controller:
         inverse: lookup-table inverse model (contraction -> pressure), or None for PID alone.
         limits: pressure range and slew rate.
         correction: learned correction added to the feedforward, or None.
+        twin: the forward model run on the applied pressure (the bundle's forward table), or None.
+        adapt: the output-map estimator fed by the twin (needs ``twin``), or None.
     """
 
     def __init__(
@@ -103,8 +113,13 @@ class Controller:
         inverse: CompiledModel | InverseModel | None = None,
         limits: Limits | None = None,
         correction: Correction | None = None,
+        twin: ForwardModel | None = None,
+        adapt: OutputMapEstimator | None = None,
     ) -> None:
+        if adapt is not None and twin is None:
+            raise ValueError("online adaptation needs the forward twin's prediction; pass twin=")
         self.reference = reference
+        self.twin, self.adapt = twin, adapt
         self.correction = correction
         self.limits = limits or Limits()
         self.inverse = inverse
@@ -126,6 +141,10 @@ class Controller:
             self.inverse.reset()
         if self.correction is not None:
             self.correction.reset()
+        if self.twin is not None:
+            self.twin.reset()
+        if self.adapt is not None:
+            self.adapt.reset()
         self.pid.reset(readings.contraction_mm, 0.0)
         self._last_bar = pressure_bar
         self._last_reference = math.nan
@@ -141,7 +160,22 @@ class Controller:
         correction) as attributes, so no per-tick object is built."""
         reference = self.reference(t)
         ahead = self.reference(t + self.preview_s) if self.preview_s else reference
-        feedforward = self.inverse.step(ahead) if self.inverse is not None else 0.0
+        twin, adapt = self.twin, self.adapt
+        if twin is not None:
+            model_mm = twin.step(p if p == p else self._last_bar)  # the pressure applied (or commanded)
+            inside = not getattr(twin, "saturated", False)  # a table clamped to its range extrapolates
+            # the residual judges the bundle itself: a leak the adaptation absorbs is still seen
+            frame.twin_mm, frame.twin_residual_mm = model_mm, y - model_mm if inside else math.nan
+            if adapt is not None:
+                if inside:
+                    adapt.update(model_mm, y)
+                frame.adapt_offset_mm, frame.adapt_gain = adapt.offset_, adapt.gain_
+        if self.inverse is None:
+            feedforward = 0.0
+        elif adapt is not None:
+            feedforward = self.inverse.step((ahead - adapt.offset_) / adapt.gain_)
+        else:
+            feedforward = self.inverse.step(ahead)
         correction = 0.0
         if self.correction is not None:
             last = self._last_reference

@@ -21,6 +21,7 @@ import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from edge.control.adapt import AdaptSettings
 from edge.control.joint import JointModel
 from edge.drivers.base import DriverClass, channel_kinds, installed_drivers
 from edge.errors import ConfigError
@@ -101,6 +102,7 @@ class RigConfig:
     telemetry: TelemetrySection = field(default_factory=TelemetrySection)
     joint: JointSection = field(default_factory=JointSection)
     feedforward: FeedforwardSection = field(default_factory=FeedforwardSection)
+    adapt: AdaptSettings = field(default_factory=AdaptSettings)
     bundle_trusted_keys: tuple[Path, ...] = ()
     source: str = "<config>"
 
@@ -121,6 +123,7 @@ SECTIONS: dict[str, type] = {
     "joint": JointSection,
     "bundle": BundleSection,
     "feedforward": FeedforwardSection,
+    "adapt": AdaptSettings,
 }
 RIG_SECTIONS = ("buses", "devices", "channels")
 
@@ -265,6 +268,11 @@ def _check_values(config: RigConfig) -> None:
         src, "safety", "mismatch_share", safety.mismatch_share, 0.0, 10.0, " (a share of the command; 0 disables)"
     )
     _in_range(src, "safety", "mismatch_window_s", safety.mismatch_window_s, 0.1, 3600.0)
+    span_note = " (a share of the bundle's span; 0 disables)"
+    _in_range(src, "safety", "twin_warn_share", safety.twin_warn_share, 0.0, 10.0, span_note)
+    _in_range(src, "safety", "twin_window_s", safety.twin_window_s, 0.05, 3600.0)
+    _in_range(src, "safety", "twin_mismatch_mm", safety.twin_mismatch_mm, 0.0, 1e4, " (0 disables the fault)")
+    _check_adapt(config)
     if control.pressure_max_bar > safety.pressure_max_bar:
         raise ConfigError(
             f"{src}: [control] pressure_max_bar {control.pressure_max_bar} exceeds [safety] pressure_max_bar "
@@ -287,13 +295,25 @@ def _check_values(config: RigConfig) -> None:
         except ValueError as exc:
             raise ConfigError(f"{src}: [joint] {exc}") from exc
     _in_range(src, "telemetry", "flush_interval_s", telemetry.flush_interval_s, 1e-3, 10.0)
-    row_bytes = 8 * (8 + len(config.rig.channels)) + 8 * (1 + len(config.rig.devices))
+    row_bytes = 8 * (12 + len(config.rig.channels)) + 8 * (1 + len(config.rig.devices))
     most = RING_BYTES_MAX // row_bytes
     if not 1024 <= telemetry.ring_ticks <= most:
         raise ConfigError(
             f"{src}: [telemetry] ring_ticks = {telemetry.ring_ticks} must be in 1024..{most} "
             f"(at least 1 s; at most {RING_BYTES_MAX >> 20} MiB of preallocated ring)"
         )
+
+
+def _check_adapt(config: RigConfig) -> None:
+    src, adapt = config.source, config.adapt
+    _in_range(src, "adapt", "memory_s", adapt.memory_s, 1e-3, 1e5, " (the forgetting time constant)")
+    _in_range(src, "adapt", "offset_max_share", adapt.offset_max_share, 0.0, 10.0, " (a share of the bundle's span)")
+    _in_range(src, "adapt", "gain_min", adapt.gain_min, 0.01, 1.0, " (1 is the model's own gain)")
+    _in_range(src, "adapt", "gain_max", adapt.gain_max, 1.0, 100.0, " (1 is the model's own gain)")
+    _in_range(src, "adapt", "excitation_share", adapt.excitation_share, 0.0, 1.0, " (a share of the bundle's span)")
+    _in_range(src, "adapt", "excitation_window_s", adapt.excitation_window_s, 1e-3, 1e5)
+    if adapt.enabled and config.rig.is_joint:
+        raise ConfigError(f"{src}: [adapt] enabled = true runs on a single muscle only; this rig is a joint")
 
 
 def _check_ordered(src: str, section: str, low_name: str, low: float, high: float) -> None:

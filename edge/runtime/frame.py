@@ -8,6 +8,9 @@ which telemetry copies whole. Fields, in order:
   (feedforward, neural correction, feedback), ``u_bar`` (the valve command, 0 when vented); on
   a joint ``reference_deg``, ``u_ff_deg`` / ``u_fb_deg`` (commanded angles) and ``u_bar`` (valve
   A; valve B is its ``valve_b_bar`` channel field);
+* on a single muscle, the forward twin (:mod:`edge.control.twin`): ``twin_mm`` (predicted
+  contraction) and ``twin_residual_mm`` (measured - predicted), and the online adaptation
+  (:mod:`edge.control.adapt`): ``adapt_offset_mm``, ``adapt_gain``; NaN when not running;
 * one field per channel (``contraction_mm``, ``pressure_bar``, ``estop``, ``valve_enable``,
   ``load_N``...), NaN when its device could not be read this tick;
 * ``state`` and ``fault`` codes (:class:`edge.runtime.safety.State` order, ``Fault`` values);
@@ -26,6 +29,7 @@ import numpy as np
 from edge.runtime.rigspec import RigSpec
 
 CONTROL_FIELDS = ("t", "lateness_us", "reference_mm", "u_ff_bar", "u_nn_bar", "u_fb_bar", "u_bar")
+TWIN_FIELDS = ("twin_mm", "twin_residual_mm", "adapt_offset_mm", "adapt_gain")  # NaN unless running
 # a joint's feedforward and feedback are commanded angles (edge.control.joint); u_bar is valve A
 JOINT_CONTROL_FIELDS = ("t", "lateness_us", "reference_deg", "u_ff_deg", "u_fb_deg", "u_bar")
 CODE_FIELDS = ("state", "fault")
@@ -40,6 +44,7 @@ class FrameLayout:
     channel_fields: tuple[str, ...]
     status_fields: tuple[tuple[str, str, str], ...]  # (device, read field, write field)
     status_offset: int  # bytes: where the rd_/wr_ fields start (they are contiguous)
+    nan_fields: tuple[str, ...] = ()  # NaN in a new frame besides the channels (the twin's)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -48,7 +53,7 @@ class FrameLayout:
     def new(self) -> Any:
         """A zeroed frame with every channel NaN (nothing read yet)."""
         frame = self.cls()
-        for name in self.channel_fields:
+        for name in (*self.channel_fields, *self.nan_fields):
             setattr(frame, name, float("nan"))
         return frame
 
@@ -67,7 +72,7 @@ class FrameLayout:
 
 def frame_layout(rig: RigSpec) -> FrameLayout:
     """The frame of ``rig`` (see the module docstring)."""
-    floats = list(JOINT_CONTROL_FIELDS if rig.is_joint else CONTROL_FIELDS)  # a copy: appended below
+    floats = list(JOINT_CONTROL_FIELDS if rig.is_joint else CONTROL_FIELDS + TWIN_FIELDS)  # a copy: appended below
     channel_fields = []
     for always in (rig.output_field, "pressure_bar", "estop", "valve_enable"):  # the controller's
         if always not in {c.field for c in rig.channels}:
@@ -89,4 +94,5 @@ def frame_layout(rig: RigSpec) -> FrameLayout:
     if dtype.itemsize != ctypes.sizeof(cls):
         raise RuntimeError("frame layout: ctypes and numpy disagree on the row size")
     status_offset = 8 * len(floats) + 4 * len(CODE_FIELDS)
-    return FrameLayout(cls, dtype, tuple(channel_fields), tuple(status), status_offset)
+    nan_fields = () if rig.is_joint else TWIN_FIELDS
+    return FrameLayout(cls, dtype, tuple(channel_fields), tuple(status), status_offset, nan_fields)

@@ -12,6 +12,7 @@ in the same tick and ends the run; every exit path vents the valve, closes the r
 
 from __future__ import annotations
 
+import dataclasses
 import gc
 import math
 import threading
@@ -22,6 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from edge.control.adapt import OutputMapEstimator
 from edge.control.joint import JointController
 from edge.control.pid import PIDGains
 from edge.control.reference import Reference, beyond_reach
@@ -66,6 +68,17 @@ def bundle_record(bundle: Bundle | None) -> dict[str, object] | None:
     }
 
 
+def output_span(bundle: Bundle) -> float:
+    """The bundle's output span (the inverse takes the forward table's reachable output range)."""
+    lo, hi = bundle.inverse.input_range
+    if math.isfinite(lo) and math.isfinite(hi) and hi > lo:
+        return float(hi - lo)
+    from edge.runtime.bundle import reachable_output_range
+
+    lo, hi = reachable_output_range(bundle.forward, bundle.inverse)
+    return float(hi - lo)
+
+
 def check_duration(duration_s: float | None, settle_s: float, reference: Reference) -> None:
     """Refuse a run that would measure nothing: a non-finite or non-positive duration, or a
     settle time that covers all of it."""
@@ -90,6 +103,8 @@ class EdgeRuntime:
         reference: desired contraction [mm] over time.
         feedforward: False runs PID alone (the comparison of Ai2019 Table 5).
         use_correction: False ignores the bundle's ONNX correction.
+        twin: False runs without the forward twin (and so without ``[adapt]``): the table-only
+            tick, for comparison.
         telemetry_path: where to write telemetry (None: none); ``{time}`` in it becomes the
             start time (UTC), so a service writes a new file per run.
         settle_s: ticks before this time [s] are not scored in the error summary.
@@ -111,6 +126,7 @@ class EdgeRuntime:
         *,
         feedforward: bool = True,
         use_correction: bool = True,
+        twin: bool = True,
         telemetry_path: str | Path | None = None,
         settle_s: float = 0.0,
         profile: bool | str = False,
@@ -149,7 +165,13 @@ class EdgeRuntime:
             self.controller = JointController(reference, gains, j, table, limits, j.feedback == "through_model")
         else:
             gains = PIDGains(c.kp_bar_per_mm, c.ki_bar_per_mm_s, c.kd_bar_s_per_mm, c.derivative_filter_s)
-            self.controller = Controller(reference, gains, inverse, limits, correction)
+            forward = bundle.forward if twin and bundle is not None else None  # the forward twin watches the muscle
+            adapt = (
+                OutputMapEstimator(config.adapt, config.period_s, output_span(bundle))
+                if config.adapt.enabled and forward is not None and bundle is not None and inverse is not None
+                else None
+            )
+            self.controller = Controller(reference, gains, inverse, limits, correction, forward, adapt)
         self.layout = frame_layout(config.rig)
         self.frame = self.layout.new()
         channel_limits = tuple(
@@ -163,6 +185,7 @@ class EdgeRuntime:
             device_errors=self.rig.errors, output_field=spec.output_field,
             vent_fields=tuple(ch.field for ch in spec.channels if ch.name == "valve_b"),
             pressure_fields=tuple(ch.field for ch in spec.channels if ch.name == "pressure_b"),
+            twin_span_mm=output_span(bundle) if bundle is not None and not spec.is_joint else 0.0,
         )  # fmt: skip
         self.supervisor.bind(self.layout.status_view(self.frame))
         self.telemetry_path = (
@@ -204,6 +227,8 @@ class EdgeRuntime:
             "feedforward": self.controller.inverse is not None,
             "feedforward_role": self.feedforward_role if self.controller.inverse is not None else "",
             "correction": self.controller.correction is not None,
+            "twin": getattr(self.controller, "twin", None) is not None,
+            "adapt": dataclasses.asdict(self.config.adapt) if getattr(self.controller, "adapt", None) else None,
             "states": [s.value for s in State],
             "faults": {f.value: f.name.lower() for f in Fault},
             "channels": {
@@ -316,7 +341,19 @@ class EdgeRuntime:
             "telemetry_dropped": telemetry.dropped if telemetry else 0,
             "bundle": bundle_record(self.bundle),
             "warnings": list(self.warnings),
+            **self._twin_record(),
         }
+
+    def _twin_record(self) -> dict[str, object]:
+        """The twin's worst window RMS [mm] and the adaptation's final map, when they ran."""
+        watch, adapt = self.supervisor.twin_watch, getattr(self.controller, "adapt", None)
+        record: dict[str, object] = {}
+        if watch is not None:
+            record["twin_rms_max_mm"] = watch.worst_rms_mm
+            record["twin_warning_t"] = watch.warned_at_s
+        if adapt is not None:
+            record["adapt"] = {"offset_mm": adapt.offset_, "gain": adapt.gain_, "updates": adapt.updates_}
+        return record
 
     def _event(self, t: float, kind: str, text: str, **extra: object) -> None:
         """An event to the telemetry log and the live view (whichever are open)."""

@@ -24,6 +24,7 @@ from typing import Any
 
 from edge.control.joint import JointController
 from edge.control.tick import Command, Controller, Readings, ScratchFrame
+from edge.control.twin import TWIN_FAULT, TWIN_WARN, TwinWatch
 from edge.runtime.mismatch import MismatchMonitor
 
 
@@ -42,6 +43,7 @@ class Fault(Enum):
     WATCHDOG = 10
     TELEMETRY = 11
     MODEL_MISMATCH = 12
+    TWIN_MISMATCH = 13
 
 
 class State(Enum):
@@ -77,6 +79,12 @@ class SafetyLimits:
     mismatch_share: float = 0.3  # 0 disables
     mismatch_window_s: float = 5.0
     mismatch_fault: bool = False
+    # the forward twin (edge.control.twin): the residual's RMS over twin_window_s above
+    # twin_warn_share of the bundle's output span warns (0 disables); above twin_mismatch_mm
+    # it trips (0: never)
+    twin_warn_share: float = 0.06
+    twin_window_s: float = 2.0
+    twin_mismatch_mm: float = 0.0
 
 
 @dataclass(slots=True)
@@ -161,6 +169,7 @@ class Supervisor:
     output_field: str = "contraction_mm"
     vent_fields: tuple[str, ...] = ()
     pressure_fields: tuple[str, ...] = ()
+    twin_span_mm: float = 0.0  # the bundle's output span: the twin's warning bound is a share of it
     _bus_errors: int = 0
     _overruns: int = 0
     _armed_at: float = math.nan
@@ -168,6 +177,7 @@ class Supervisor:
     _status: Any = None
     _status_zero: bytes = b""
     mismatch: MismatchMonitor | None = field(init=False, default=None)
+    twin_watch: TwinWatch | None = field(init=False, default=None)
     warnings: list[str] = field(init=False, default_factory=list)  # the runtime reports each once
 
     def __post_init__(self) -> None:
@@ -189,6 +199,10 @@ class Supervisor:
         if self.controller.inverse is not None and lim.mismatch_share > 0:  # only a model can mismatch
             self.mismatch = MismatchMonitor(lim.mismatch_share, lim.mismatch_window_s, "deg" if joint else "bar")
         self._feedback_field = "u_fb_deg" if joint else "u_fb_bar"
+        if getattr(self.controller, "twin", None) is not None:
+            self.twin_watch = TwinWatch(
+                lim.twin_warn_share * self.twin_span_mm, lim.twin_mismatch_mm, lim.twin_window_s, self.period_s
+            )
 
     def arm(self, readings: Readings) -> None:
         if self.state is not State.CONFIGURED:
@@ -200,6 +214,8 @@ class Supervisor:
             detector.reset()
         if self.mismatch is not None:
             self.mismatch.reset()
+        if self.twin_watch is not None:
+            self.twin_watch.reset()
         self.state = State.ARMED
 
     def reset(self) -> None:
@@ -323,6 +339,13 @@ class Supervisor:
                 if lim.mismatch_fault:
                     return self.trip(frame, Fault.MODEL_MISMATCH, mismatch.warning or "model mismatch")
                 self.warnings.append(mismatch.warning or "model mismatch")
+            watch = self.twin_watch
+            if watch is not None:
+                verdict = watch.add(t, frame.twin_residual_mm)
+                if verdict == TWIN_FAULT:
+                    return self.trip(frame, Fault.TWIN_MISMATCH, watch.fault or "forward twin mismatch")
+                if verdict == TWIN_WARN:
+                    self.warnings.append(watch.warning or "forward twin mismatch")
         self.state = State.RUNNING
         frame.valve_enable, frame.state, frame.fault = 1.0, RUNNING_CODE, 0
         return None

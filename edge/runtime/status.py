@@ -67,7 +67,7 @@ def wants_status(json_output: bool, stream: TextIO | None = None) -> bool:
 
 
 def describe_frame(frame: object, output_field: str, unit: str, errors: object | None) -> str:
-    """``running  t 12.0 s  RMS 2.41 mm  max 7.70 mm  y 41.3 mm  p 2.31 bar  faults none``."""
+    """``running  t 12.0 s  RMS 2.41 mm  max 7.70 mm  y 41.3 mm  p 2.31 bar  twin +0.4 mm  faults none``."""
     state = STATE_NAMES.get(int(getattr(frame, "state", 0)), "?")
     parts = [f"{state:<7}", f"t {getattr(frame, 't', math.nan):7.1f} s"]
     count = getattr(errors, "count", 0) if errors is not None else 0
@@ -79,6 +79,9 @@ def describe_frame(frame: object, output_field: str, unit: str, errors: object |
     pressure = getattr(frame, "pressure_bar", math.nan)
     if pressure == pressure:
         parts.append(f"p {pressure:.2f} bar")
+    residual = getattr(frame, "twin_residual_mm", math.nan)  # measured - the forward twin's prediction
+    if residual == residual:
+        parts.append(f"twin {residual:+.1f} {unit}")
     fault = int(getattr(frame, "fault", 0))
     parts.append(f"faults {FAULT_NAMES.get(fault, fault) if fault else 'none'}")
     if state == State.SAFE.value:

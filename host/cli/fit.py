@@ -14,6 +14,7 @@ from host.cli.outputs import FIGURE_SUFFIXES, check_output, strict_json
 
 if TYPE_CHECKING:
     from host.data import Measurement
+    from host.evaluate import Score
     from host.workflow import Estimator, TestResult
 
 
@@ -44,6 +45,11 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
     add_data_options(fit)
     fit.add_argument(
         "--plot", metavar="OUT.png", help="write measured vs model loops of each --test here (.png, .pdf or .svg)"
+    )
+    fit.add_argument(
+        "--adapt",
+        action="store_true",
+        help="also score each --test with the edge's online adaptation ([adapt], default settings) replayed over it",
     )
     fit.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     fit.add_argument(
@@ -89,6 +95,33 @@ def fit_record(args: argparse.Namespace, samples: int, estimator: Estimator, res
     }
 
 
+def adapted_scores(results: list[TestResult], tests: list[Measurement], train: Measurement) -> list[Score]:
+    """Each test scored with the edge's online adaptation replayed over it (:mod:`host.adapt_score`)."""
+    import numpy as np
+
+    from edge.control.adapt import AdaptSettings
+    from host.adapt_score import adapted_score
+
+    span = float(np.ptp(train.y))
+    if not span > 0:
+        raise DataError(f"{train.source}: the training output never moves; --adapt needs its span")
+    return [adapted_score(r, m, span, AdaptSettings(enabled=True)) for r, m in zip(results, tests)]
+
+
+def print_adapted(results: list[TestResult], adapted: list[Score], y_unit: str) -> None:
+    """The table of held-out errors with online adaptation, beside the plain ones."""
+    print(f"{'with --adapt':<28} {'scored':>7} {'RMSE' + y_unit:>12} {'% p-p':>7} {'plain % p-p':>12}")
+    for r, s in zip(results, adapted):
+        plain_pct = r.prediction.score.rmse_pct_pp
+        print(f"{r.name:<28} {s.samples:>7} {s.rmse:>12.4g} {s.rmse_pct_pp:>7.2f} {plain_pct:>12.2f}")
+    plain = sum(r.prediction.score.rmse_pct_pp for r in results) / len(results)
+    mean = sum(s.rmse_pct_pp for s in adapted) / len(adapted)
+    print(
+        f"mean % p-p: {mean:.2f} adapted, {plain:.2f} plain (the rig's [adapt] estimator, default settings, replayed "
+        "from where each input starts moving; each sample predicted from the samples before it; no calibrated offset)"
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     from host.progress import Steps, wanted
     from host.workflow import make_estimator, save_bundle, score_on, warn_extrapolation
@@ -100,6 +133,8 @@ def run(args: argparse.Namespace) -> int:
     if args.save:
         check_output(args.save, "--save", kind="dir")
         check_save_target(args.save)  # a foreign directory is refused before the fit, not after
+    if args.adapt and not args.test:
+        raise DataError("--adapt scores the --test recordings with online adaptation; pass at least one --test CSV")
     if args.plot:
         if not args.test:
             raise DataError("--plot draws the --test recordings' loops; pass at least one --test CSV")
@@ -127,6 +162,7 @@ def run(args: argparse.Namespace) -> int:
         estimator.fit(train.u, train.y)
         steps.start("scoring")
         results = score_on(estimator.model_, tests, args.calibration)
+        adapted = adapted_scores(results, tests, train) if args.adapt else None
         if args.save:
             steps.start("writing the bundle")
             units = bundle_units(train)
@@ -149,8 +185,9 @@ def run(args: argparse.Namespace) -> int:
                             "rmse": r.prediction.score.rmse,
                             "rmse_pct_pp": r.prediction.score.rmse_pct_pp,
                             "max_error": r.prediction.score.max_error,
+                            **({"adapted": adapted[i].as_dict()} if adapted else {}),
                         }
-                        for r in results
+                        for i, r in enumerate(results)
                     ],
                 }
             )
@@ -178,6 +215,8 @@ def run(args: argparse.Namespace) -> int:
             f"(start state and offset estimated on the first {args.calibration:.0%} of each test after the input "
             "starts moving; those samples are not scored)"
         )
+        if adapted:
+            print_adapted(results, adapted, y_unit)
     else:
         print("no --test given: pass held-out recordings with --test to score the model")
     if args.plot:
