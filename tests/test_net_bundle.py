@@ -141,7 +141,7 @@ def test_the_preview_is_the_lag_of_the_contraction_behind_the_command(lag):
 
 def test_the_controller_feeds_a_previewing_inverse_the_reference_ahead():
     from edge.control.pid import PIDGains
-    from edge.control.tick import Controller, Readings
+    from edge.control.tick import Controller, Readings, ScratchFrame
 
     class Recording:
         input_range = (0.0, 100.0)
@@ -160,8 +160,9 @@ def test_the_controller_feeds_a_previewing_inverse_the_reference_ahead():
     inverse = Recording()
     controller = Controller(lambda t: 100.0 * t, PIDGains(0.0, 0.0, 0.0), inverse)
     controller.arm(Readings(0.0))
-    command = controller.tick(0.2, 1e-3, Readings(0.0))
-    assert inverse.seen == [pytest.approx(25.0)] and command.reference_mm == pytest.approx(20.0)
+    frame = ScratchFrame(0.2, 0.0)
+    controller.fill(frame, 1e-3)
+    assert inverse.seen == [pytest.approx(25.0)] and frame.reference_mm == pytest.approx(20.0)
 
 
 @pytest.mark.parametrize(

@@ -35,10 +35,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
+from edge.control.law import JointFrame, Readings
 from edge.control.pid import PID, PIDGains
-from edge.control.tick import Limits, Readings
+from edge.control.tick import Limits
 from edge.hysteresis.lut import CompiledModel
 
 DEG = math.pi / 180.0
@@ -108,7 +108,8 @@ class StaticInversion:
 
 
 class JointController:
-    """Inverse-Preisach feedforward + PID on the angle + static inversion to two pressures.
+    """Inverse-Preisach feedforward + PID on the angle + static inversion to two pressures; a
+    ``ControlLaw[JointFrame]`` (:mod:`edge.control.law`).
 
     Args:
         reference: desired angle [deg] as a function of time [s].
@@ -121,6 +122,7 @@ class JointController:
     """
 
     correction = None  # no learned correction on the joint
+    twin = None  # nor a forward twin
 
     def __init__(
         self,
@@ -139,8 +141,41 @@ class JointController:
         self.pid = PID(PIDGains(gains.kp, gains.ki, gains.kd, gains.tau_d_s, -COMMAND_LIMIT_DEG, COMMAND_LIMIT_DEG))
         self._last_bar = self._last_b_bar = 0.0
         self._last_diff_bar = 0.0  # (p_A - p_B) / 2 of the latest tick: the supervisor's stuck check
-        self.reference_mm_ = math.nan  # the supervisor's name for the latest reference (here deg)
-        self.bias_bar_ = 0.0  # the supervisor's name for the feedforward (here deg)
+        self._reference_deg = math.nan  # of the latest tick
+        self._feedforward_deg = 0.0  # of the latest tick
+
+    @property
+    def last_command_bar(self) -> float:
+        """Valve A's latest command [bar]."""
+        return self._last_bar
+
+    @property
+    def last_b_bar(self) -> float:
+        """Valve B's latest command [bar]."""
+        return self._last_b_bar
+
+    @property
+    def sweep_command_bar(self) -> float:
+        """Half the latest differential pressure (p_A - p_B) / 2 [bar]: co-contraction moves no angle."""
+        return self._last_diff_bar
+
+    @property
+    def last_reference(self) -> float:
+        """The desired angle of the latest tick [deg] (NaN before the first, and open loop)."""
+        return self._reference_deg
+
+    @property
+    def last_bias(self) -> float:
+        """The feedforward of the latest tick [deg of commanded angle]."""
+        return self._feedforward_deg
+
+    def hold(self, frame: JointFrame, armed: bool) -> None:
+        """Both valves keep their latest commands (0 bar before the first run tick)."""
+        frame.u_bar, frame.valve_b_bar = (0.0, 0.0) if armed else (self._last_bar, self._last_b_bar)
+
+    def vent(self, frame: JointFrame) -> None:
+        """Both valves to 0 bar."""
+        frame.u_bar = frame.valve_b_bar = 0.0
 
     def arm(self, readings: Readings, pressure_bar: float = 0.0) -> None:
         """Bumpless start from the present angle (``readings.contraction_mm`` carries it, deg)."""
@@ -150,16 +185,16 @@ class JointController:
         self._last_bar = self._last_b_bar = pressure_bar
         self._last_diff_bar = 0.0
 
-    def fill_from(self, frame: Any, dt: float, t: float, y: float, p: float) -> float:
+    def fill_from(self, frame: JointFrame, dt: float, t: float, y: float, p: float) -> float:
         """Fill the command fields of ``frame`` for angle ``y`` [deg]; returns valve A's command."""
-        reference = self.reference_mm_ = self.reference(t)
+        reference = self._reference_deg = self.reference(t)
         inverse = self.inverse
         if self.through_model and inverse is not None:
             shifted = self.pid.step(reference, y, dt, reference)  # theta_d + PID(e)
-            commanded = self.bias_bar_ = inverse.step(shifted)
+            commanded = self._feedforward_deg = inverse.step(shifted)
             feedforward = commanded - (shifted - reference)  # so that u_ff + u_fb = theta_c
         else:
-            feedforward = self.bias_bar_ = inverse.step(reference) if inverse is not None else 0.0
+            feedforward = self._feedforward_deg = inverse.step(reference) if inverse is not None else 0.0
             commanded = math.nan
         if not math.isfinite(feedforward):
             frame.reference_deg, frame.u_ff_deg, frame.u_fb_deg = reference, feedforward, 0.0

@@ -19,7 +19,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -180,7 +180,8 @@ class EdgeRuntime:
             if ch.kind == ANALOG_IN and (math.isfinite(ch.minimum) or math.isfinite(ch.maximum))
         )
         self.rig = rig or open_rig(config, self.layout)
-        self.supervisor = Supervisor(
+        # the frame is the rig's ctypes row; the law (muscle or joint) fixes which fields it fills
+        self.supervisor: Supervisor[Any] = Supervisor(
             self.controller, config.safety, self.layout.status_fields, channel_limits, config.period_s,
             device_errors=self.rig.errors, output_field=spec.output_field,
             vent_fields=tuple(ch.field for ch in spec.channels if ch.name == "valve_b"),
@@ -227,7 +228,7 @@ class EdgeRuntime:
             "feedforward": self.controller.inverse is not None,
             "feedforward_role": self.feedforward_role if self.controller.inverse is not None else "",
             "correction": self.controller.correction is not None,
-            "twin": getattr(self.controller, "twin", None) is not None,
+            "twin": self.controller.twin is not None,
             "adapt": dataclasses.asdict(self.config.adapt) if getattr(self.controller, "adapt", None) else None,
             "states": [s.value for s in State],
             "faults": {f.value: f.name.lower() for f in Fault},
@@ -438,11 +439,11 @@ class EdgeRuntime:
                     record_csv()
                 if record_live is not None:
                     record_live()
-                if supervisor._bus_errors != streak:
-                    streak = supervisor._bus_errors
+                if supervisor.bus_error_streak != streak:
+                    streak = supervisor.bus_error_streak
                     if streak:
                         self._device_error_ticks += 1
-                        self._event(t, "device_error", supervisor._device_fault(frame) or "device error")
+                        self._event(t, "device_error", supervisor.device_fault(frame) or "device error")
                 if profile and phase is not None and tick < len(phase):
                     t4 = clock_ns()
                     phase[tick] = (t1 - t0, t2 - t1, t3 - t2, t4 - t3, (c2 - c1) + (cpu_ns() - c3) if timed_cpu else 0)
