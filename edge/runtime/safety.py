@@ -16,11 +16,12 @@ angle, and an encoder at rest reads the same count.
 
 from __future__ import annotations
 
+import ctypes
 import errno as errno_codes
 import math
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Any, Generic, TypeVar
+from typing import Generic, TypeVar
 
 from edge.control.law import ControlLaw, Readings, TickFrame
 from edge.control.twin import TWIN_FAULT, TWIN_WARN, TwinWatch
@@ -155,7 +156,7 @@ class Supervisor(Generic[F]):
     _overruns: int = 0
     _armed_at: float = math.nan
     _stuck: tuple[StuckDetector, StuckDetector] = field(init=False)
-    _status: Any = None
+    _status: ctypes.Array[ctypes.c_char] | None = None
     _status_zero: bytes = b""
     mismatch: MismatchMonitor | None = field(init=False, default=None)
     twin_watch: TwinWatch | None = field(init=False, default=None)
@@ -232,7 +233,7 @@ class Supervisor(Generic[F]):
                 return f"{device} write failed ({_errno_name(code)}): {self.device_errors.get(device, '')}".rstrip(": ")
         return None
 
-    def bind(self, status: Any) -> None:
+    def bind(self, status: ctypes.Array[ctypes.c_char]) -> None:
         """Check the device statuses of the frame through ``status``, a ctypes byte array over
         all its ``rd_*`` / ``wr_*`` fields (one comparison per tick instead of one per field)."""
         self._status, self._status_zero = status, bytes(len(status.raw))
