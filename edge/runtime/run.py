@@ -28,6 +28,7 @@ from edge.control.joint import JointController
 from edge.control.pid import PIDGains
 from edge.control.reference import Reference, beyond_reach
 from edge.control.tick import Controller, Limits, Readings
+from edge.control.twin import ForwardModel
 from edge.errors import BusError, DataError
 from edge.runtime.bundle import Bundle
 from edge.runtime.config import RigConfig
@@ -142,6 +143,7 @@ class EdgeRuntime:
             bundle.require_units("deg" if spec.is_joint else "bar", self.unit)
         correction = None
         self.feedforward_role = ""
+        self.twin_model = ""  # "net" or "table" when the forward twin runs
         if bundle is not None and not spec.is_joint:
             from edge.control.net_roles import choose_role
 
@@ -165,7 +167,7 @@ class EdgeRuntime:
             self.controller = JointController(reference, gains, j, table, limits, j.feedback == "through_model")
         else:
             gains = PIDGains(c.kp_bar_per_mm, c.ki_bar_per_mm_s, c.kd_bar_s_per_mm, c.derivative_filter_s)
-            forward = bundle.forward if twin and bundle is not None else None  # the forward twin watches the muscle
+            forward = self._forward_twin(bundle) if twin and bundle is not None else None  # watches the muscle
             adapt = (
                 OutputMapEstimator(config.adapt, config.period_s, output_span(bundle))
                 if config.adapt.enabled and forward is not None and bundle is not None and inverse is not None
@@ -345,11 +347,21 @@ class EdgeRuntime:
             **self._twin_record(),
         }
 
+    def _forward_twin(self, bundle: Bundle) -> ForwardModel:
+        """The twin: the forward net when the net feedforward runs and the bundle holds one (it
+        models the rate dependence the net inverse compensates), else the forward table."""
+        if self.feedforward_role.startswith("net") and "forward" in bundle.net_paths:
+            self.twin_model = "net"
+            return bundle.forward_net(self.config.period_s)
+        self.twin_model = "table"
+        return bundle.forward
+
     def _twin_record(self) -> dict[str, object]:
         """The twin's worst window RMS [mm] and the adaptation's final map, when they ran."""
         watch, adapt = self.supervisor.twin_watch, getattr(self.controller, "adapt", None)
         record: dict[str, object] = {}
         if watch is not None:
+            record["twin_model"] = self.twin_model
             record["twin_rms_max_mm"] = watch.worst_rms_mm
             record["twin_warning_t"] = watch.warned_at_s
         if adapt is not None:
