@@ -134,6 +134,7 @@ class JointController:
         through_model: bool = False,
     ) -> None:
         self.reference = reference
+        self._reference_at: Callable[[float], float] = getattr(reference, "function", reference)  # one call less
         self.through_model = through_model and inverse is not None
         self.limits = limits or Limits()
         self.inverse = inverse
@@ -187,7 +188,7 @@ class JointController:
 
     def fill_from(self, frame: JointFrame, dt: float, t: float, y: float, p: float) -> float:
         """Fill the command fields of ``frame`` for angle ``y`` [deg]; returns valve A's command."""
-        reference = self._reference_deg = self.reference(t)
+        reference = self._reference_deg = self._reference_at(t)
         inverse = self.inverse
         if self.through_model and inverse is not None:
             shifted = self.pid.step(reference, y, dt, reference)  # theta_d + PID(e)
