@@ -70,7 +70,9 @@ class ControlLaw(Protocol[F_contra]):
     """What the supervisor needs of a control law; the law fills frames of type ``F_contra``.
 
     ``inverse`` and ``correction`` say which models run (the run summary and the mismatch
-    monitor read them); ``twin`` is the forward model or None.
+    monitor read them); ``twin`` is the forward model or None. The values of the latest tick
+    are read-only through this protocol (mypy refuses an assignment); the laws keep them as
+    plain attributes, which the supervisor reads every tick without a property call.
     """
 
     @property

@@ -29,13 +29,13 @@ class OpenLoop(Controller):
         super().__init__(command, NO_FEEDBACK, None, limits)
 
     def fill_from(self, frame: MuscleFrame, dt: float, t: float, y: float, p: float) -> float:
-        wanted = self._bias_bar = self.reference(t)
-        lim, last = self.limits, self._last_bar
+        wanted = self.last_bias = self.reference(t)
+        lim, last = self.limits, self.last_command_bar
         step = lim.slew_bar_per_s * dt
         command = min(max(wanted, last - step), last + step)
         command = min(max(command, lim.pressure_min_bar), lim.pressure_max_bar)
-        self._last_bar = command
-        self._reference_mm = math.nan
+        self.last_command_bar = self.sweep_command_bar = command
+        self.last_reference = math.nan
         frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar, frame.u_bar = (
             math.nan,
             wanted,
@@ -54,10 +54,10 @@ class OpenLoopJoint(JointController):
         super().__init__(command, NO_FEEDBACK, model, None, limits)
 
     def fill_from(self, frame: JointFrame, dt: float, t: float, y: float, p: float) -> float:
-        wanted = self._feedforward_deg = self.reference(t)
+        wanted = self.last_bias = self.reference(t)
         commanded = min(max(wanted, -COMMAND_LIMIT_DEG), COMMAND_LIMIT_DEG)
         p_a, p_b = self.valves(commanded, dt)
-        self._reference_deg = math.nan
+        self.last_reference = math.nan
         frame.reference_deg, frame.u_ff_deg, frame.u_fb_deg = math.nan, commanded, 0.0
         frame.u_bar, frame.valve_b_bar = p_a, p_b
         return p_a

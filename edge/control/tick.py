@@ -108,6 +108,7 @@ class Controller:
         # a Reference wraps its function: call that directly (one Python call less per tick)
         self._reference_at: Callable[[float], float] = getattr(reference, "function", reference)
         self.twin, self.adapt = twin, adapt
+        self._twin_table = twin if isinstance(twin, CompiledModel) else None  # it says when it clamped
         self.correction = correction
         self.limits = limits or Limits()
         self.inverse = inverse
@@ -118,34 +119,16 @@ class Controller:
                 gains.kp, gains.ki, gains.kd, gains.tau_d_s, self.limits.pressure_min_bar, self.limits.pressure_max_bar
             )
         )
-        self._last_bar = 0.0
-        self._last_reference = math.nan
-        self._reference_mm = math.nan  # of the latest tick
-        self._bias_bar = 0.0  # feedforward + correction of the latest tick
-
-    @property
-    def last_command_bar(self) -> float:
-        """The latest valve command [bar]."""
-        return self._last_bar
-
-    @property
-    def sweep_command_bar(self) -> float:
-        """The command whose sweep must move the contraction (the valve command) [bar]."""
-        return self._last_bar
-
-    @property
-    def last_reference(self) -> float:
-        """The reference of the latest tick [mm] (NaN before the first)."""
-        return self._reference_mm
-
-    @property
-    def last_bias(self) -> float:
-        """Feedforward + correction of the latest tick [bar]."""
-        return self._bias_bar
+        # the ControlLaw's read-only values, plain attributes (a property costs a call per tick)
+        self.last_command_bar = 0.0  # the latest valve command [bar]
+        self.sweep_command_bar = 0.0  # the same: its sweep must move the contraction (stuck check) [bar]
+        self.last_reference = math.nan  # the reference of the latest tick [mm]
+        self.last_bias = 0.0  # feedforward + correction of the latest tick [bar]
+        self._previous_reference = math.nan  # for the correction's reference rate
 
     def hold(self, frame: MuscleFrame, armed: bool) -> None:
         """The latest command again (0 bar before the first run tick); no model steps."""
-        frame.u_bar = 0.0 if armed else self._last_bar
+        frame.u_bar = 0.0 if armed else self.last_command_bar
 
     def vent(self, frame: MuscleFrame) -> None:
         """The valve to 0 bar."""
@@ -162,8 +145,8 @@ class Controller:
         if self.adapt is not None:
             self.adapt.reset()
         self.pid.reset(readings.contraction_mm, 0.0)
-        self._last_bar = pressure_bar
-        self._last_reference = math.nan
+        self.last_command_bar = self.sweep_command_bar = pressure_bar
+        self._previous_reference = math.nan
 
     def fill(self, frame: MuscleFrame, dt: float) -> None:
         """Set ``reference_mm``, ``u_ff_bar``, ``u_nn_bar``, ``u_fb_bar`` and ``u_bar`` of
@@ -179,8 +162,9 @@ class Controller:
         ahead = reference_at(t + self.preview_s) if self.preview_s else reference
         twin, adapt = self.twin, self.adapt
         if twin is not None:
-            model_mm = twin.step(p if p == p else self._last_bar)  # the pressure applied (or commanded)
-            inside = not getattr(twin, "saturated", False)  # a table clamped to its range extrapolates
+            model_mm = twin.step(p if p == p else self.last_command_bar)  # the pressure applied (or commanded)
+            table = self._twin_table  # a table clamped to its range extrapolates: no residual then
+            inside = table is None or not table.saturated
             # the residual judges the bundle itself: a leak the adaptation absorbs is still seen
             frame.twin_mm, frame.twin_residual_mm = model_mm, y - model_mm if inside else math.nan
             if adapt is not None:
@@ -195,11 +179,11 @@ class Controller:
             feedforward = self.inverse.step(ahead)
         correction = 0.0
         if self.correction is not None:
-            last = self._last_reference
+            last = self._previous_reference
             rate = (reference - last) / dt if last == last and dt > 0 else 0.0
-            correction = self.correction.step((reference, rate, feedforward, y, p, self._last_bar))
-        self._last_reference = self._reference_mm = reference
-        bias = self._bias_bar = feedforward + correction
+            correction = self.correction.step((reference, rate, feedforward, y, p, self.last_command_bar))
+        self._previous_reference = self.last_reference = reference
+        bias = self.last_bias = feedforward + correction
         if not math.isfinite(bias):  # the supervisor trips on it; keep the PID state clean
             frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar, frame.u_bar = (
                 reference,
@@ -211,14 +195,14 @@ class Controller:
             return math.nan
         total = self.pid.step(reference, y, dt, bias)
         feedback = total - bias
-        lim, last_bar = self.limits, self._last_bar
+        lim, last_bar = self.limits, self.last_command_bar
         step = lim.slew_bar_per_s * dt
         if total > last_bar + step:
             total = last_bar + step
         elif total < last_bar - step:
             total = last_bar - step
         command = min(max(total, lim.pressure_min_bar), lim.pressure_max_bar)
-        self._last_bar = command
+        self.last_command_bar = self.sweep_command_bar = command
         frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar, frame.u_bar = (
             reference,
             feedforward,

@@ -152,7 +152,7 @@ class Supervisor(Generic[F]):
     vent_fields: tuple[str, ...] = ()
     pressure_fields: tuple[str, ...] = ()
     twin_span_mm: float = 0.0  # the bundle's output span: the twin's warning bound is a share of it
-    _bus_errors: int = 0
+    bus_error_streak: int = field(init=False, default=0)  # ticks in a row with a device error (read only)
     _overruns: int = 0
     _armed_at: float = math.nan
     _stuck: tuple[StuckDetector, StuckDetector] = field(init=False)
@@ -189,7 +189,7 @@ class Supervisor(Generic[F]):
         if self.state is not State.CONFIGURED:
             raise RuntimeError(f"cannot arm from {self.state.value}; reset first")
         self.controller.arm(readings)
-        self._bus_errors = self._overruns = 0
+        self.bus_error_streak = self._overruns = 0
         self._armed_at = math.nan
         for detector in self._stuck:
             detector.reset()
@@ -198,11 +198,6 @@ class Supervisor(Generic[F]):
         if self.twin_watch is not None:
             self.twin_watch.reset()
         self.state = State.ARMED
-
-    @property
-    def bus_error_streak(self) -> int:
-        """Consecutive ticks (up to this one) with a device error; 0 after a clean tick."""
-        return self._bus_errors
 
     def reset(self) -> None:
         """Leave the latched safe state (an operator's explicit action)."""
@@ -252,13 +247,13 @@ class Supervisor(Generic[F]):
         if status is None or status.raw != self._status_zero:
             failed = self.device_fault(frame) if self.status_fields else None
         if failed is not None:
-            self._bus_errors += 1
-            if self._bus_errors >= lim.bus_error_streak:
+            self.bus_error_streak += 1
+            if self.bus_error_streak >= lim.bus_error_streak:
                 return self.trip(
-                    frame, Fault.BUS, f"{self._bus_errors} consecutive ticks with a device error; {failed}"
+                    frame, Fault.BUS, f"{self.bus_error_streak} consecutive ticks with a device error; {failed}"
                 )
-        elif self._bus_errors:
-            self._bus_errors = 0
+        elif self.bus_error_streak:
+            self.bus_error_streak = 0
         if frame.lateness_us > self._period_us:
             self._overruns += 1
             if self._overruns >= lim.overrun_streak:
@@ -298,13 +293,19 @@ class Supervisor(Generic[F]):
             self._armed_at = t
         last = controller.sweep_command_bar
         stuck_y, stuck_p = self._stuck
-        frozen = stuck_y.stuck_for(t, y, last)
-        if frozen:
-            return self._stuck_trip(frame, label, y, frozen)
-        if p == p:
-            frozen = stuck_p.stuck_for(t, p, last)
+        if y != stuck_y._value:  # a live reading changes (nearly) every tick: the detector restarts, inline
+            stuck_y._value, stuck_y._since, stuck_y._low, stuck_y._high = y, t, last, last
+        else:
+            frozen = stuck_y.stuck_for(t, y, last)
             if frozen:
-                return self._stuck_trip(frame, "pressure", p, frozen)
+                return self._stuck_trip(frame, label, y, frozen)
+        if p == p:
+            if p != stuck_p._value:
+                stuck_p._value, stuck_p._since, stuck_p._low, stuck_p._high = p, t, last, last
+            else:
+                frozen = stuck_p.stuck_for(t, p, last)
+                if frozen:
+                    return self._stuck_trip(frame, "pressure", p, frozen)
         u = controller.fill_from(frame, dt, t, y, p)
         bias = controller.last_bias
         if bias - bias != 0.0:  # inf or nan
