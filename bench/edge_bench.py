@@ -3,6 +3,7 @@
 Usage: python bench/edge_bench.py [--seconds 60] [--skip-realtime] [--before DIR] [--repeats 3]
        python bench/edge_bench.py --only-rig-commands 3 [--rig-seconds 20]
        python bench/edge_bench.py --only-live 3 [--rig-seconds 20]
+       python bench/edge_bench.py --only-lean 3 [--compute-seconds 10] [--before DIR]
 
 1. Per-tick breakdown (median / p99 us) of a 20 s lockstep run on the HIL at 1 kHz with a
    Preisach lookup-table inverse and a 2-5-10-1 ONNX correction (Ai2019's BP net shape):
@@ -13,6 +14,8 @@ Usage: python bench/edge_bench.py [--seconds 60] [--skip-realtime] [--before DIR
    CPU clock calls cost time themselves), and the same runs of the pre-v2 runtime when its
    source is given (``--before DIR``, e.g. ``git archive 4df3193 | tar -x -C DIR``) so the
    ratio comes from one process on one loaded machine.
+1a. ``--only-lean N``: the whole tick (table only, and with the twin) against a flat loop doing
+   the same arithmetic (issue 32's reference), interleaved, wall beside CPU, ratios of medians.
 1b. ``--only-twin N``: the whole-tick compute with the forward twin on (the default), off (the
    table-only tick) and with ``[adapt]``, N repeats, wall beside CPU, ratios to table-only.
 2. Lateness of a real-time 1 kHz run (``--seconds``) over the serial DAQ protocol on a pty, the
@@ -376,6 +379,145 @@ def twin_table(bundle: Path, seconds: float, repeats: int) -> None:
         print(f"{'':<28} CPU median / table only: {np.median([r[2] for r in values]) / base:.2f}x")
 
 
+def flat_tick(bundle: Path, seconds: float, between: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """The reference for the whole tick: one flat loop doing the same arithmetic with no
+    plumbing (issue 32): ADC scaling of two codes, the reference, the bundle's inverse table
+    step, PID (filtered derivative, anti-windup), slew, clamp, and a telemetry row copied into a
+    ring. Per-tick (wall, thread CPU) [us], each from its own pass (the CPU clock costs time).
+    ``between``: the emulated rig's read and write (the HIL plant, ~60 us of other Python) run
+    between the timed ticks, untimed, as they do around the runtime's tick."""
+    import ctypes
+    import math
+
+    from edge.control.pid import PIDGains
+    from edge.runtime.frame import frame_layout
+
+    config = rig_config()
+    c = config.control
+    gains = PIDGains(c.kp_bar_per_mm, c.ki_bar_per_mm_s, c.kd_bar_s_per_mm, c.derivative_filter_s, 0.0, 6.0)
+    reference = parse_reference("sine:amplitude=30,frequency=0.2,offset=40")
+    n, dt = int(seconds * 1000), 1e-3
+    rng = np.random.default_rng(0)
+    codes = (rng.integers(0, 4096, size=(n, 2))).tolist()
+    row_type = ctypes.c_double * 8
+    row_bytes = ctypes.sizeof(row_type)
+    layout = frame_layout(config.rig)  # the ring is as wide as the real frame's row
+    ring = bytearray(1024 * layout.dtype.itemsize)
+    out = []
+    rig = EdgeRuntime(config, None, reference) if between else None
+    for clock in (time.perf_counter_ns, time.thread_time_ns):
+        inverse = load_bundle(bundle).inverse
+        inverse.reset()
+        row = row_type()
+        source = memoryview(row).cast("B")
+        integral, y_filtered, last, alpha = 0.0, 40.0, 0.0, dt / (gains.tau_d_s + dt)
+        kp, ki, kd, slew = gains.kp, gains.ki, gains.kd, c.slew_bar_per_s * dt
+        ns = np.zeros(n, dtype=np.int64)
+        width = layout.dtype.itemsize
+        for k in range(n):
+            if rig is not None:
+                rig.rig.read(rig.frame)
+                rig.rig.write(rig.frame)
+            start = clock()
+            t = k * dt
+            code_y, code_p = codes[k]
+            y = code_y * 0.0366 - 2.0
+            p = code_p * 0.00195 + 0.0
+            r = reference(t)
+            ff = inverse.step(r)
+            if math.isfinite(ff):
+                error = r - y
+                previous = y_filtered
+                y_filtered = previous + alpha * (y - previous)
+                derivative = (y_filtered - previous) / dt
+                increment = ki * error * dt
+                total = kp * error + integral + increment - kd * derivative + ff
+                if not ((total > 6.0 and error > 0) or (total < 0.0 and error < 0)):
+                    integral += increment
+                total = min(max(kp * error + integral - kd * derivative + ff, 0.0), 6.0)
+                u = min(max(total, last - slew), last + slew)
+                last = u = min(max(u, 0.0), 6.0)
+            else:
+                total, u = ff, 0.0
+            row[0], row[1], row[2], row[3], row[4], row[5], row[6], row[7] = t, r, ff, total - ff, u, y, p, 1.0
+            at = (k % 1024) * width
+            ring[at : at + row_bytes] = source
+            ns[k] = clock() - start
+        out.append(ns / 1e3)
+    if rig is not None:
+        rig.rig.close()
+    return out[0], out[1]
+
+
+LEAN_BEFORE_SCRIPT = """
+import sys, tempfile, json
+from pathlib import Path
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+from edge.control.reference import parse_reference
+from edge.runtime.bundle import load_bundle
+from edge.runtime.run import PHASES, EdgeRuntime
+from tests.edge_helpers import rig_config
+out = []
+for profile in (True, "cpu"):
+    reference = parse_reference("sine:amplitude=30,frequency=0.2,offset=40")
+    edge = EdgeRuntime(rig_config(), load_bundle(sys.argv[2]), reference, profile=profile, use_correction=False,
+                       twin=sys.argv[4] == "1")
+    s = edge.run(float(sys.argv[3])).as_dict()
+    ph = edge.phase_ns[: s["ticks"]] / 1e3
+    c = ph[:, PHASES.index("control")] + ph[:, PHASES.index("log")] if profile is True else ph[:, PHASES.index("cpu")]
+    out += [float(np.median(c)), float(np.percentile(c, 99))]
+print(json.dumps(out))
+"""
+
+
+def lean_before(root: Path, bundle: Path, seconds: float, twin: bool) -> tuple[float, float, float, float]:
+    """The whole tick of another source tree (``--before DIR``), in a subprocess of this run."""
+    import json
+    import os
+
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    result = subprocess.run(
+        [sys.executable, "-c", LEAN_BEFORE_SCRIPT, str(root), str(bundle), str(seconds), "1" if twin else "0"],
+        capture_output=True, text=True, env=env, cwd=str(root), check=True,
+    )  # fmt: skip
+    wall_med, wall_p99, cpu_med, cpu_p99 = json.loads(result.stdout.strip().splitlines()[-1])
+    return wall_med, wall_p99, cpu_med, cpu_p99
+
+
+def lean_table(bundle: Path, seconds: float, repeats: int, before_root: Path | None = None) -> None:
+    """Issue 32: the whole tick (table feedforward, no net, no twin; with the twin) against the
+    flat reference, interleaved in one process, wall beside CPU; ratios of medians. With
+    ``before_root`` the same rows of that source tree (a subprocess), interleaved too."""
+    print(f"\nWhole tick against a flat loop doing the same arithmetic, {seconds:g} s lockstep runs x {repeats}")
+    print("(us per tick; whole tick = supervisor + control law + telemetry row; ratio = median / flat median)")
+    print(f"{'tick':<39} {'wall med':>8} {'wall p99':>8} {'CPU med':>8} {'CPU p99':>8} {'wall x':>7} {'CPU x':>7}")
+    flat_names = ("flat loop (reference)", "flat loop, HIL between")
+    rows: dict[str, list[tuple[float, float, float, float]]] = {name: [] for name in flat_names}
+    variants = {"whole tick, table only": {"twin": False}, "whole tick, table + twin": {"twin": True}}
+    for name in variants:
+        rows[name] = []
+        if before_root is not None:
+            rows[f"{name} (before)"] = []
+    for _ in range(repeats):
+        for name, between in zip(flat_names, (False, True), strict=True):
+            wall, cpu = flat_tick(bundle, seconds, between)
+            rows[name].append((np.median(wall), np.percentile(wall, 99), np.median(cpu), np.percentile(cpu, 99)))
+        for name, variant in variants.items():
+            rows[name] += [r[:4] for r in whole_tick(bundle, seconds, False, 1, **variant)]
+            if before_root is not None:
+                rows[f"{name} (before)"].append(lean_before(before_root, bundle, seconds, variant["twin"]))
+    flat_wall = np.median([r[0] for r in rows["flat loop (reference)"]])
+    flat_cpu = np.median([r[2] for r in rows["flat loop (reference)"]])
+    for name, values in rows.items():
+        wall_med, cpu_med = np.median([r[0] for r in values]), np.median([r[2] for r in values])
+        wall_p99, cpu_p99 = np.median([r[1] for r in values]), np.median([r[3] for r in values])
+        print(
+            f"{name:<39} {wall_med:8.2f} {wall_p99:8.2f} {cpu_med:8.2f} {cpu_p99:8.2f} "
+            f"{wall_med / flat_wall:7.2f} {cpu_med / flat_cpu:7.2f}"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0, help="length of each real-time run")
@@ -389,6 +531,7 @@ def main() -> None:
     )
     parser.add_argument("--only-live", type=int, metavar="N", help="only the with/without --live table, N repeats")
     parser.add_argument("--only-twin", type=int, metavar="N", help="only the forward-twin tick table, N repeats")
+    parser.add_argument("--only-lean", type=int, metavar="N", help="only the whole tick vs the flat loop, N repeats")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         bundle = make_bundle(Path(tmp))
@@ -401,6 +544,9 @@ def main() -> None:
             return
         if args.only_twin:
             twin_table(bundle, args.compute_seconds, args.only_twin)
+            return
+        if args.only_lean:
+            lean_table(bundle, args.compute_seconds, args.only_lean, args.before)
             return
         breakdown(bundle)
         compute_table(bundle, args.compute_seconds, args.repeats, args.before)

@@ -307,6 +307,8 @@ def _print_summary(result: dict[str, object]) -> None:
         f"feedforward {'on' if result['feedforward'] else 'off'}, correction {'on' if result['correction'] else 'off'}"
     )
     print(f"tracking error: RMS {mm('rms_error')}, mean |e| {mm('mean_abs_error')}, max {mm('max_error')}")
+    if result.get("twin_model"):
+        print(f"forward twin: {result['twin_model']}, worst window RMS {mm('twin_rms_max_mm')} (residual)")
     print(
         f"lateness: median {lateness['lateness_median_us']:.0f} us, p99 {lateness['lateness_p99_us']:.0f} us, "
         f"max {lateness['lateness_max_us']:.0f} us; overruns {result['overruns']}; "

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from edge.control.pid import PID, PIDGains
-from edge.control.tick import Controller, Limits, Readings
+from edge.control.tick import Controller, Limits, Readings, ScratchFrame
 
 
 def test_derivative_acts_on_the_measurement_so_a_setpoint_step_gives_no_kick():
@@ -33,8 +33,11 @@ def test_bumpless_start_continues_from_the_given_output():
 def test_tick_is_pure_and_applies_slew_and_range_limits():
     controller = Controller(lambda t: 50.0, PIDGains(kp=1.0), limits=Limits(0.0, 4.0, slew_bar_per_s=10.0))
     controller.arm(Readings(0.0), pressure_bar=0.0)
-    first = controller.tick(0.0, 0.01, Readings(0.0))
-    assert first.pressure_bar == pytest.approx(0.1) and first.saturated  # 10 bar/s for 10 ms
+    first = ScratchFrame(0.0, 0.0)
+    controller.fill(first, 0.01)
+    saturated = first.u_bar != first.u_ff_bar + first.u_nn_bar + first.u_fb_bar
+    assert first.u_bar == pytest.approx(0.1) and saturated  # 10 bar/s for 10 ms
     for k in range(1, 100):
-        command = controller.tick(k * 0.01, 0.01, Readings(0.0))
-    assert command.pressure_bar == 4.0  # the range limit
+        frame = ScratchFrame(k * 0.01, 0.0)
+        controller.fill(frame, 0.01)
+    assert frame.u_bar == 4.0  # the range limit

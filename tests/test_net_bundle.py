@@ -141,7 +141,7 @@ def test_the_preview_is_the_lag_of_the_contraction_behind_the_command(lag):
 
 def test_the_controller_feeds_a_previewing_inverse_the_reference_ahead():
     from edge.control.pid import PIDGains
-    from edge.control.tick import Controller, Readings
+    from edge.control.tick import Controller, Readings, ScratchFrame
 
     class Recording:
         input_range = (0.0, 100.0)
@@ -160,8 +160,9 @@ def test_the_controller_feeds_a_previewing_inverse_the_reference_ahead():
     inverse = Recording()
     controller = Controller(lambda t: 100.0 * t, PIDGains(0.0, 0.0, 0.0), inverse)
     controller.arm(Readings(0.0))
-    command = controller.tick(0.2, 1e-3, Readings(0.0))
-    assert inverse.seen == [pytest.approx(25.0)] and command.reference_mm == pytest.approx(20.0)
+    frame = ScratchFrame(0.2, 0.0)
+    controller.fill(frame, 1e-3)
+    assert inverse.seen == [pytest.approx(25.0)] and frame.reference_mm == pytest.approx(20.0)
 
 
 @pytest.mark.parametrize(
@@ -174,3 +175,37 @@ def test_the_default_role_is_a_net_when_there_is_one_plus_the_correction_when_th
     available = feedforward_roles(net, correction)
     assert choose_role(available, "", "rig.toml") == default
     assert choose_role(available, "table", "rig.toml") == "table"  # the table is always there
+
+
+def test_the_net_feedforward_runs_the_forward_net_as_twin(trained, capsys):
+    """With role net the twin is the forward net, stepped at its own period like the inverse:
+    the run's twin_mm is the forward net replayed over the run's measured pressure, and the
+    summary says which twin ran. Whether it fits the rate-dependent muscle better than the table
+    is a property of the training (this net has 4 epochs), measured in the twin bench."""
+    from edge.runtime.telemetry_read import read_telemetry
+
+    root, _, store = trained
+    telemetry = root / "net-twin.pmt"
+    code = main(["edge", "run", "--config", str(rig_config(root, "net")), "--bundle", str(store), "--reference",
+                 "sine:amplitude=20,frequency=1,offset=35", "--duration", "3", "--telemetry", str(telemetry),
+                 "--json"])  # fmt: skip
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert code == 0 and summary["twin_model"] == "net"
+    record = read_telemetry(telemetry)
+    running = record.column("state") == 2  # RUNNING: the ticks the law filled
+    p, twin_mm = record.column("pressure_bar")[running], record.column("twin_mm")[running]
+    forward = load_bundle(store).forward_net(1e-3)
+    forward.reset()
+    replayed = np.array([forward.step(v) for v in p.tolist()])
+    table = load_bundle(store).forward
+    table.reset()
+    assert np.allclose(twin_mm, replayed, rtol=0, atol=1e-9)
+    assert not np.allclose(twin_mm, [table.step(v) for v in p.tolist()], atol=1e-3)  # not the table
+
+
+def test_the_table_feedforward_keeps_the_table_twin(trained, capsys):
+    root, _, store = trained
+    code = main(["edge", "run", "--config", str(rig_config(root, "table")), "--bundle", str(store), "--reference",
+                 SINE, "--duration", "1", "--json"])  # fmt: skip
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert code == 0 and summary["twin_model"] == "table"

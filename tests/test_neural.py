@@ -11,7 +11,7 @@ import pytest
 
 from edge.control.neural import NeuralCorrection
 from edge.control.pid import PIDGains
-from edge.control.tick import Controller, Readings
+from edge.control.tick import Controller, Readings, ScratchFrame
 from edge.errors import BundleError
 from edge.runtime.bundle import load_bundle
 from edge.runtime.safety import Fault, Supervisor
@@ -83,8 +83,9 @@ def test_a_non_finite_model_output_vents_in_the_first_tick(tmp_path):
     correction = NeuralCorrection(nan_model(tmp_path / "nan.onnx"), SPEC)
     supervisor = Supervisor(Controller(lambda t: 40.0, PIDGains(kp=0.05), correction=correction))
     supervisor.arm(Readings(40.0, 1.0))
-    outcome = supervisor.tick(0.0, 0.001, Readings(40.0, 1.0))
-    assert outcome.fault_kind is Fault.MODEL_OUTPUT and not outcome.valve_enabled and outcome.pressure_bar == 0.0
+    frame = ScratchFrame(0.0, 40.0, 1.0)
+    supervisor.step(frame, 0.001)
+    assert supervisor.fault_kind is Fault.MODEL_OUTPUT and frame.valve_enable == 0.0 and frame.u_bar == 0.0
 
 
 @pytest.fixture(scope="module")

@@ -8,8 +8,8 @@ import math
 import pytest
 
 from edge.control.pid import PIDGains
-from edge.control.tick import Controller, Readings
-from edge.runtime.safety import Fault, Health, SafetyLimits, State, Supervisor
+from edge.control.tick import Controller, Readings, ScratchFrame
+from edge.runtime.safety import RUNNING_CODE, Fault, SafetyLimits, State, Supervisor
 from edge.runtime.telemetry import read_telemetry
 from hil.rig import ADC_ADDRESS, DISPLACEMENT_CHANNEL, PRESSURE_CHANNEL
 from tests.edge_helpers import runtime
@@ -67,38 +67,66 @@ def test_a_stuck_sensor_is_found_once_the_command_has_swept_past_it(tmp_path):
     assert "contraction sensor stuck" in summary["faults"][0]
 
 
+def stepped(supervisor, t, contraction_mm, pressure_bar=math.nan, **fields):
+    """One tick of ``supervisor`` on a scratch frame (the rig's step path); returns the frame."""
+    frame = ScratchFrame(t, contraction_mm, pressure_bar)
+    for name, value in fields.items():
+        setattr(frame, name, value)
+    supervisor.step(frame, PERIOD_S)
+    return frame
+
+
 def test_a_live_sensor_at_rest_is_not_called_stuck():
     detector_limits = SafetyLimits(stuck_window_s=0.3, stuck_command_span_bar=0.5)
     supervisor = Supervisor(Controller(lambda t: 0.0, PIDGains(kp=0.0)), detector_limits)
     supervisor.arm(Readings(0.0, 0.0))
     for k in range(2000):  # a frozen reading with a steady command: nothing to compare with
-        outcome = supervisor.tick(k * 0.001, 0.001, Readings(0.0, 0.0))
-    assert outcome.state is State.RUNNING
+        frame = stepped(supervisor, k * 0.001, 0.0, 0.0)
+    assert supervisor.state is State.RUNNING and frame.state == RUNNING_CODE and frame.valve_enable == 1.0
 
 
 def test_a_streak_of_overruns_trips_and_one_does_not():
     supervisor = Supervisor(Controller(lambda t: 10.0, PIDGains(kp=0.01)))
     supervisor.arm(Readings(10.0, 0.5))
-    assert supervisor.tick(0.0, 0.001, Readings(10.0, 0.5), Health(overrun=True)).state is State.RUNNING
+    late = 2e6 * PERIOD_S  # lateness [us]: two periods
+    stepped(supervisor, 0.0, 10.0, 0.5, lateness_us=late)
+    assert supervisor.state is State.RUNNING
     for k in range(1, 5):
-        outcome = supervisor.tick(k * 0.001, 0.001, Readings(10.0, 0.5), Health(overrun=True))
-    assert outcome.state is State.SAFE and outcome.fault_kind is Fault.OVERRUN
+        stepped(supervisor, k * 0.001, 10.0, 0.5, lateness_us=late)
+    assert supervisor.state is State.SAFE and supervisor.fault_kind is Fault.OVERRUN
+
+
+def test_a_failed_sensor_read_holds_the_command_and_a_streak_trips():
+    supervisor = Supervisor(
+        Controller(lambda t: 10.0, PIDGains(kp=0.1)), status_fields=(("sensors", "rd_sensors", "rd_sensors"),)
+    )
+    supervisor.arm(Readings(8.0, 0.5))
+    running = stepped(supervisor, 0.0, 8.0, 0.5)
+    held = stepped(supervisor, 0.001, math.nan, math.nan, rd_sensors=5)  # EIO
+    assert held.u_bar == running.u_bar > 0.0 and held.valve_enable == 1.0 and supervisor.bus_error_streak == 1
+    stepped(supervisor, 0.002, math.nan, math.nan, rd_sensors=5)
+    vented = stepped(supervisor, 0.003, math.nan, math.nan, rd_sensors=5)
+    assert supervisor.fault_kind is Fault.BUS and vented.u_bar == 0.0 and vented.valve_enable == 0.0
 
 
 def test_non_finite_readings_and_model_output_trip():
     supervisor = Supervisor(Controller(lambda t: 10.0, PIDGains(kp=0.01)))
     supervisor.arm(Readings(10.0))
-    assert supervisor.tick(0.0, 0.001, Readings(math.nan)).fault_kind is Fault.SENSOR_NONFINITE
+    stepped(supervisor, 0.0, math.nan)
+    assert supervisor.fault_kind is Fault.SENSOR_NONFINITE
     supervisor = Supervisor(Controller(lambda t: math.inf, PIDGains(kp=0.01)))
     supervisor.arm(Readings(10.0))
-    assert supervisor.tick(0.0, 0.001, Readings(10.0)).fault_kind is Fault.MODEL_OUTPUT
+    stepped(supervisor, 0.0, 10.0)
+    assert supervisor.fault_kind is Fault.MODEL_OUTPUT
 
 
 def test_safe_is_left_only_by_an_explicit_reset():
     supervisor = Supervisor(Controller(lambda t: 10.0, PIDGains(kp=0.01)))
     supervisor.arm(Readings(10.0))
-    assert supervisor.tick(0.0, 0.001, Readings(10.0), Health(estop=True)).state is State.SAFE
-    assert supervisor.tick(1.0, 0.001, Readings(40.0, 1.0)).state is State.SAFE  # latched
+    stepped(supervisor, 0.0, 10.0, estop=1.0)
+    assert supervisor.state is State.SAFE
+    stepped(supervisor, 1.0, 40.0, 1.0)
+    assert supervisor.state is State.SAFE  # latched
     supervisor.reset()
     assert supervisor.state is State.CONFIGURED
     supervisor.arm(Readings(40.0))

@@ -35,10 +35,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
+from edge.control.law import JointFrame, Readings
 from edge.control.pid import PID, PIDGains
-from edge.control.tick import Limits, Readings
+from edge.control.tick import Limits
 from edge.hysteresis.lut import CompiledModel
 
 DEG = math.pi / 180.0
@@ -108,7 +108,8 @@ class StaticInversion:
 
 
 class JointController:
-    """Inverse-Preisach feedforward + PID on the angle + static inversion to two pressures.
+    """Inverse-Preisach feedforward + PID on the angle + static inversion to two pressures; a
+    ``ControlLaw[JointFrame]`` (:mod:`edge.control.law`).
 
     Args:
         reference: desired angle [deg] as a function of time [s].
@@ -121,6 +122,7 @@ class JointController:
     """
 
     correction = None  # no learned correction on the joint
+    twin = None  # nor a forward twin
 
     def __init__(
         self,
@@ -132,34 +134,44 @@ class JointController:
         through_model: bool = False,
     ) -> None:
         self.reference = reference
+        self._reference_at: Callable[[float], float] = getattr(reference, "function", reference)  # one call less
         self.through_model = through_model and inverse is not None
         self.limits = limits or Limits()
         self.inverse = inverse
         self.statics = StaticInversion(model)
         self.pid = PID(PIDGains(gains.kp, gains.ki, gains.kd, gains.tau_d_s, -COMMAND_LIMIT_DEG, COMMAND_LIMIT_DEG))
-        self._last_bar = self._last_b_bar = 0.0
-        self._last_diff_bar = 0.0  # (p_A - p_B) / 2 of the latest tick: the supervisor's stuck check
-        self.reference_mm_ = math.nan  # the supervisor's name for the latest reference (here deg)
-        self.bias_bar_ = 0.0  # the supervisor's name for the feedforward (here deg)
+        # the ControlLaw's read-only values, plain attributes (a property costs a call per tick)
+        self.last_command_bar = self.last_b_bar = 0.0  # valve A's and valve B's latest commands [bar]
+        self.sweep_command_bar = 0.0  # (p_A - p_B) / 2 [bar]: co-contraction moves no angle (stuck check)
+        self.last_reference = math.nan  # the desired angle of the latest tick [deg]
+        self.last_bias = 0.0  # the feedforward of the latest tick [deg of commanded angle]
+
+    def hold(self, frame: JointFrame, armed: bool) -> None:
+        """Both valves keep their latest commands (0 bar before the first run tick)."""
+        frame.u_bar, frame.valve_b_bar = (0.0, 0.0) if armed else (self.last_command_bar, self.last_b_bar)
+
+    def vent(self, frame: JointFrame) -> None:
+        """Both valves to 0 bar."""
+        frame.u_bar = frame.valve_b_bar = 0.0
 
     def arm(self, readings: Readings, pressure_bar: float = 0.0) -> None:
         """Bumpless start from the present angle (``readings.contraction_mm`` carries it, deg)."""
         if self.inverse is not None:
             self.inverse.reset()
         self.pid.reset(readings.contraction_mm, 0.0)
-        self._last_bar = self._last_b_bar = pressure_bar
-        self._last_diff_bar = 0.0
+        self.last_command_bar = self.last_b_bar = pressure_bar
+        self.sweep_command_bar = 0.0
 
-    def fill_from(self, frame: Any, dt: float, t: float, y: float, p: float) -> float:
+    def fill_from(self, frame: JointFrame, dt: float, t: float, y: float, p: float) -> float:
         """Fill the command fields of ``frame`` for angle ``y`` [deg]; returns valve A's command."""
-        reference = self.reference_mm_ = self.reference(t)
+        reference = self.last_reference = self._reference_at(t)
         inverse = self.inverse
         if self.through_model and inverse is not None:
             shifted = self.pid.step(reference, y, dt, reference)  # theta_d + PID(e)
-            commanded = self.bias_bar_ = inverse.step(shifted)
+            commanded = self.last_bias = inverse.step(shifted)
             feedforward = commanded - (shifted - reference)  # so that u_ff + u_fb = theta_c
         else:
-            feedforward = self.bias_bar_ = inverse.step(reference) if inverse is not None else 0.0
+            feedforward = self.last_bias = inverse.step(reference) if inverse is not None else 0.0
             commanded = math.nan
         if not math.isfinite(feedforward):
             frame.reference_deg, frame.u_ff_deg, frame.u_fb_deg = reference, feedforward, 0.0
@@ -178,12 +190,12 @@ class JointController:
         p_a, p_b = self.statics(commanded_deg)
         lim = self.limits
         step = lim.slew_bar_per_s * dt
-        last_a, last_b = self._last_bar, self._last_b_bar
+        last_a, last_b = self.last_command_bar, self.last_b_bar
         d_a, d_b = p_a - last_a, p_b - last_b
         largest = max(abs(d_a), abs(d_b))
         if largest > step:  # both valves move by the same fraction: the pair stays on the static path
             p_a, p_b = last_a + d_a * step / largest, last_b + d_b * step / largest
         p_a = min(max(p_a, lim.pressure_min_bar), lim.pressure_max_bar)
         p_b = min(max(p_b, lim.pressure_min_bar), lim.pressure_max_bar)
-        self._last_bar, self._last_b_bar, self._last_diff_bar = p_a, p_b, 0.5 * (p_a - p_b)
+        self.last_command_bar, self.last_b_bar, self.sweep_command_bar = p_a, p_b, 0.5 * (p_a - p_b)
         return p_a, p_b

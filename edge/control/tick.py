@@ -8,9 +8,9 @@ pressure range and slew rate. With a forward twin (:mod:`edge.control.twin`) the
 also predicts the contraction from the applied pressure (``twin_mm``, ``twin_residual_mm``);
 with online adaptation (:mod:`edge.control.adapt`) it estimates the offset ``a`` and gain
 ``b`` of the model's output map from that prediction and asks the inverse for ``(r - a) / b``
-(``adapt_offset_mm``, ``adapt_gain``). :meth:`Controller.fill` works on the frame
-(:mod:`edge.runtime.frame`); :meth:`Controller.tick` is the same law on plain values, for
-tests and tools that have no frame.
+(``adapt_offset_mm``, ``adapt_gain``). The controller is a
+:class:`~edge.control.law.ControlLaw` on :class:`~edge.control.law.MuscleFrame`: it works on the
+runtime's frame (:mod:`edge.runtime.frame`) or, for tools without a rig, a :class:`ScratchFrame`.
 """
 
 from __future__ import annotations
@@ -18,42 +18,27 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Protocol
 
 from edge.control.adapt import OutputMapEstimator
+from edge.control.law import MuscleFrame, Readings
 from edge.control.pid import PID, PIDGains
 from edge.control.twin import ForwardModel
 from edge.hysteresis.lut import CompiledModel
 
-
-@dataclass(slots=True)
-class Readings:
-    """Sensor values of one tick: contraction [mm], pressure [bar]."""
-
-    contraction_mm: float
-    pressure_bar: float = float("nan")
-
-
-@dataclass(slots=True)
-class Command:
-    """What to send this tick, and why."""
-
-    pressure_bar: float
-    reference_mm: float
-    feedforward_bar: float
-    correction_bar: float
-    feedback_bar: float
-    saturated: bool
+__all__ = ["Controller", "Correction", "InverseModel", "Limits", "Readings", "ScratchFrame"]
 
 
 class ScratchFrame:
-    """The fields of a frame the control law and the supervisor use, as a plain object (for
-    :meth:`Controller.tick` and :meth:`edge.runtime.safety.Supervisor.tick`)."""
+    """A single muscle's frame (:class:`~edge.control.law.MuscleFrame`) as a plain object, for
+    tools and tests that drive the control law without a rig's frame layout. ``rd_sensors`` is
+    the errno of the sensor read (0 = ok), for a supervisor given
+    ``status_fields=(("sensors", "rd_sensors", "rd_sensors"),)``."""
 
     __slots__ = (
         "t", "lateness_us", "reference_mm", "u_ff_bar", "u_nn_bar", "u_fb_bar", "u_bar",
         "contraction_mm", "pressure_bar", "estop", "valve_enable", "state", "fault",
-        "twin_mm", "twin_residual_mm", "adapt_offset_mm", "adapt_gain",
+        "twin_mm", "twin_residual_mm", "adapt_offset_mm", "adapt_gain", "rd_sensors",
     )  # fmt: skip
 
     def __init__(self, t: float = 0.0, contraction_mm: float = math.nan, pressure_bar: float = math.nan) -> None:
@@ -62,6 +47,7 @@ class ScratchFrame:
         self.contraction_mm, self.pressure_bar = contraction_mm, pressure_bar
         self.estop, self.valve_enable, self.state, self.fault = 0.0, 0.0, 0, 0
         self.twin_mm = self.twin_residual_mm = self.adapt_offset_mm = self.adapt_gain = math.nan
+        self.rd_sensors = 0
 
 
 class InverseModel(Protocol):
@@ -94,7 +80,7 @@ class Limits:
 
 
 class Controller:
-    """Inverse-hysteresis feedforward + PID + limits.
+    """Inverse-hysteresis feedforward + PID + limits; a ``ControlLaw[MuscleFrame]``.
 
     Args:
         reference: desired contraction [mm] as a function of time [s].
@@ -119,7 +105,10 @@ class Controller:
         if adapt is not None and twin is None:
             raise ValueError("online adaptation needs the forward twin's prediction; pass twin=")
         self.reference = reference
+        # a Reference wraps its function: call that directly (one Python call less per tick)
+        self._reference_at: Callable[[float], float] = getattr(reference, "function", reference)
         self.twin, self.adapt = twin, adapt
+        self._twin_table = twin if isinstance(twin, CompiledModel) else None  # it says when it clamped
         self.correction = correction
         self.limits = limits or Limits()
         self.inverse = inverse
@@ -130,10 +119,20 @@ class Controller:
                 gains.kp, gains.ki, gains.kd, gains.tau_d_s, self.limits.pressure_min_bar, self.limits.pressure_max_bar
             )
         )
-        self._last_bar = 0.0
-        self._last_reference = math.nan
-        self.reference_mm_ = math.nan  # of the latest tick
-        self.bias_bar_ = 0.0  # feedforward + correction of the latest tick
+        # the ControlLaw's read-only values, plain attributes (a property costs a call per tick)
+        self.last_command_bar = 0.0  # the latest valve command [bar]
+        self.sweep_command_bar = 0.0  # the same: its sweep must move the contraction (stuck check) [bar]
+        self.last_reference = math.nan  # the reference of the latest tick [mm]
+        self.last_bias = 0.0  # feedforward + correction of the latest tick [bar]
+        self._previous_reference = math.nan  # for the correction's reference rate
+
+    def hold(self, frame: MuscleFrame, armed: bool) -> None:
+        """The latest command again (0 bar before the first run tick); no model steps."""
+        frame.u_bar = 0.0 if armed else self.last_command_bar
+
+    def vent(self, frame: MuscleFrame) -> None:
+        """The valve to 0 bar."""
+        frame.u_bar = 0.0
 
     def arm(self, readings: Readings, pressure_bar: float = 0.0) -> None:
         """Bumpless start from the present state (feedforward memory reset to the rest state)."""
@@ -146,24 +145,26 @@ class Controller:
         if self.adapt is not None:
             self.adapt.reset()
         self.pid.reset(readings.contraction_mm, 0.0)
-        self._last_bar = pressure_bar
-        self._last_reference = math.nan
+        self.last_command_bar = self.sweep_command_bar = pressure_bar
+        self._previous_reference = math.nan
 
-    def fill(self, frame: Any, dt: float) -> None:
+    def fill(self, frame: MuscleFrame, dt: float) -> None:
         """Set ``reference_mm``, ``u_ff_bar``, ``u_nn_bar``, ``u_fb_bar`` and ``u_bar`` of
         ``frame`` from its ``t`` [s], ``contraction_mm`` and ``pressure_bar``; ``dt`` [s]."""
         self.fill_from(frame, dt, frame.t, frame.contraction_mm, frame.pressure_bar)
 
-    def fill_from(self, frame: Any, dt: float, t: float, y: float, p: float) -> float:
+    def fill_from(self, frame: MuscleFrame, dt: float, t: float, y: float, p: float) -> float:
         """:meth:`fill` with the readings already at hand (the supervisor has them); returns
-        the command ``u_bar`` and keeps ``reference_mm_`` and ``bias_bar_`` (feedforward +
-        correction) as attributes, so no per-tick object is built."""
-        reference = self.reference(t)
-        ahead = self.reference(t + self.preview_s) if self.preview_s else reference
+        the command ``u_bar`` and keeps :attr:`last_reference` and :attr:`last_bias`
+        (feedforward + correction), so no per-tick object is built."""
+        reference_at = self._reference_at
+        reference = reference_at(t)
+        ahead = reference_at(t + self.preview_s) if self.preview_s else reference
         twin, adapt = self.twin, self.adapt
         if twin is not None:
-            model_mm = twin.step(p if p == p else self._last_bar)  # the pressure applied (or commanded)
-            inside = not getattr(twin, "saturated", False)  # a table clamped to its range extrapolates
+            model_mm = twin.step(p if p == p else self.last_command_bar)  # the pressure applied (or commanded)
+            table = self._twin_table  # a table clamped to its range extrapolates: no residual then
+            inside = table is None or not table.saturated
             # the residual judges the bundle itself: a leak the adaptation absorbs is still seen
             frame.twin_mm, frame.twin_residual_mm = model_mm, y - model_mm if inside else math.nan
             if adapt is not None:
@@ -178,11 +179,11 @@ class Controller:
             feedforward = self.inverse.step(ahead)
         correction = 0.0
         if self.correction is not None:
-            last = self._last_reference
+            last = self._previous_reference
             rate = (reference - last) / dt if last == last and dt > 0 else 0.0
-            correction = self.correction.step((reference, rate, feedforward, y, p, self._last_bar))
-        self._last_reference = self.reference_mm_ = reference
-        bias = self.bias_bar_ = feedforward + correction
+            correction = self.correction.step((reference, rate, feedforward, y, p, self.last_command_bar))
+        self._previous_reference = self.last_reference = reference
+        bias = self.last_bias = feedforward + correction
         if not math.isfinite(bias):  # the supervisor trips on it; keep the PID state clean
             frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar, frame.u_bar = (
                 reference,
@@ -194,14 +195,14 @@ class Controller:
             return math.nan
         total = self.pid.step(reference, y, dt, bias)
         feedback = total - bias
-        lim, last_bar = self.limits, self._last_bar
+        lim, last_bar = self.limits, self.last_command_bar
         step = lim.slew_bar_per_s * dt
         if total > last_bar + step:
             total = last_bar + step
         elif total < last_bar - step:
             total = last_bar - step
         command = min(max(total, lim.pressure_min_bar), lim.pressure_max_bar)
-        self._last_bar = command
+        self.last_command_bar = self.sweep_command_bar = command
         frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar, frame.u_bar = (
             reference,
             feedforward,
@@ -210,11 +211,3 @@ class Controller:
             command,
         )
         return command
-
-    def tick(self, t: float, dt: float, readings: Readings) -> Command:
-        """The command for time ``t`` [s] after a tick of ``dt`` [s]; no I/O, no clock."""
-        frame = ScratchFrame(t, readings.contraction_mm, readings.pressure_bar)
-        self.fill(frame, dt)
-        u = frame.u_bar
-        saturated = u == u and u != frame.u_ff_bar + frame.u_nn_bar + frame.u_fb_bar
-        return Command(u, frame.reference_mm, frame.u_ff_bar, frame.u_nn_bar, frame.u_fb_bar, saturated)

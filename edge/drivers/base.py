@@ -17,6 +17,7 @@ from __future__ import annotations
 from importlib.metadata import entry_points
 from typing import Any, ClassVar, Protocol
 
+from edge.control.law import TickFrame
 from edge.errors import ConfigError
 from edge.runtime.rigspec import BusSpec, ChannelSpec, DeviceSpec
 from edge.runtime.wire import WireTime
@@ -29,11 +30,11 @@ class Device(Protocol):
 
     name: str
 
-    def read(self, frame: Any) -> None: ...
+    def read(self, frame: TickFrame) -> None: ...
 
-    def write(self, frame: Any) -> None: ...
+    def write(self, frame: TickFrame) -> None: ...
 
-    def prepare(self, frame: Any) -> None: ...
+    def prepare(self, frame: TickFrame) -> None: ...
 
     def vent(self) -> None:
         """Best effort safe output (valve closed / disabled); never raises."""

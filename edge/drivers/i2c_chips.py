@@ -11,8 +11,9 @@ matters least (pressure) first; give a second time-critical sensor its own conve
 from __future__ import annotations
 
 import math
-from typing import Any, ClassVar
+from typing import ClassVar
 
+from edge.control.law import TickFrame
 from edge.devices.ads1x15 import DATA_RATES, FULL_SCALE_V, ADS1x15
 from edge.devices.mcp4725 import MCP4725
 from edge.drivers.base import check_address, check_inputs, option
@@ -94,7 +95,7 @@ class ADS1x15Device:
         self._channels = [(c.input, c.field, c.scale, c.zero) for c in channels]
         self._pending = False
 
-    def read(self, frame: Any) -> None:
+    def read(self, frame: TickFrame) -> None:
         adc = self.adc
         for i, (channel, field, scale, zero) in enumerate(self._channels):
             if i == 0 and self._pending:
@@ -104,13 +105,13 @@ class ADS1x15Device:
                 volts = adc.read_volts(channel)  # type: ignore[arg-type]
             setattr(frame, field, (volts - zero) * scale)
 
-    def prepare(self, frame: Any) -> None:
+    def prepare(self, frame: TickFrame) -> None:
         if self.pipeline and self._channels:
             self._pending = False
             self.adc.start_single(self._channels[0][0])  # type: ignore[arg-type]
             self._pending = True
 
-    def write(self, frame: Any) -> None:
+    def write(self, frame: TickFrame) -> None:
         """No outputs."""
 
     def vent(self) -> None:
@@ -168,13 +169,13 @@ class MCP4725Device:
         (channel,) = channels
         self._field, self._bar_per_volt = channel.field, channel.scale
 
-    def read(self, frame: Any) -> None:
+    def read(self, frame: TickFrame) -> None:
         """No inputs."""
 
-    def prepare(self, frame: Any) -> None:
+    def prepare(self, frame: TickFrame) -> None:
         """Nothing to start."""
 
-    def write(self, frame: Any) -> None:
+    def write(self, frame: TickFrame) -> None:
         value = getattr(frame, self._field)
         self.dac.write_volts(value / self._bar_per_volt if math.isfinite(value) else 0.0)
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
+from edge.control.law import TickFrame
 from edge.drivers.base import check_inputs
 from edge.hal.clock import Clock
 from edge.hal.gpio import GpioLines
@@ -59,15 +60,15 @@ class GpioDevice:
         self._inputs = [(c.name, c.field) for c in channels if c.kind == LINE_IN]
         self._outputs = [(c.name, c.field) for c in channels if c.kind == LINE_OUT]
 
-    def read(self, frame: Any) -> None:
+    def read(self, frame: TickFrame) -> None:
         get = self.lines.get
         for name, field in self._inputs:
             setattr(frame, field, 1.0 if get(name) else 0.0)
 
-    def prepare(self, frame: Any) -> None:
+    def prepare(self, frame: TickFrame) -> None:
         """Nothing to start."""
 
-    def write(self, frame: Any) -> None:
+    def write(self, frame: TickFrame) -> None:
         for name, field in self._outputs:
             self.lines.set(name, getattr(frame, field) == 1.0)
 

@@ -5,8 +5,9 @@
 from __future__ import annotations
 
 import math
-from typing import Any, ClassVar
+from typing import ClassVar
 
+from edge.control.law import TickFrame
 from edge.devices.daq_client import DaqClient
 from edge.devices.daq_protocol import COMMAND_FORMAT, SAMPLE_FORMAT
 from edge.drivers.base import option
@@ -72,7 +73,7 @@ class SerialDaqDevice:
         enable = [c.field for c in channels if c.name == "valve_enable"]
         self._enable = enable[0] if enable else None
 
-    def read(self, frame: Any) -> None:
+    def read(self, frame: TickFrame) -> None:
         sample = self.client.read()
         for index, field, scale, zero in self._analog:
             volts = sample.pressure_volts if index == 0 else sample.displacement_volts
@@ -80,10 +81,10 @@ class SerialDaqDevice:
         for field in self._lines:
             setattr(frame, field, 1.0 if sample.estop else 0.0)
 
-    def prepare(self, frame: Any) -> None:
+    def prepare(self, frame: TickFrame) -> None:
         """The DAQ converts on its own clock."""
 
-    def write(self, frame: Any) -> None:
+    def write(self, frame: TickFrame) -> None:
         enabled = self._enable is not None and getattr(frame, self._enable) == 1.0
         volts = 0.0
         if self._valve is not None and enabled:

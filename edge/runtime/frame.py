@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import ctypes
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -50,24 +49,25 @@ class FrameLayout:
     def names(self) -> tuple[str, ...]:
         return tuple(self.dtype.names or ())
 
-    def new(self) -> Any:
-        """A zeroed frame with every channel NaN (nothing read yet)."""
+    def new(self) -> ctypes.Structure:
+        """A zeroed frame with every channel NaN (nothing read yet); it satisfies
+        :class:`edge.control.law.TickFrame` and the rig's law's frame protocol (fields by name)."""
         frame = self.cls()
         for name in (*self.channel_fields, *self.nan_fields):
             setattr(frame, name, float("nan"))
         return frame
 
-    def status_view(self, frame: Any) -> Any:
+    def status_view(self, frame: ctypes.Structure) -> ctypes.Array[ctypes.c_char]:
         """A ctypes byte array over every ``rd_*`` / ``wr_*`` field of ``frame`` (all zero: all ok)."""
         return (ctypes.c_char * (self.dtype.itemsize - self.status_offset)).from_buffer(frame, self.status_offset)
 
-    def bytes_view(self, frame: Any) -> memoryview:
+    def bytes_view(self, frame: ctypes.Structure) -> memoryview:
         """The frame's memory as bytes (telemetry copies it whole)."""
         return memoryview(frame).cast("B")
 
-    def as_array(self, frame: Any) -> np.ndarray:
+    def as_array(self, frame: ctypes.Structure) -> np.ndarray:
         """The frame's memory as a one-row numpy structured array (no copy)."""
-        return np.frombuffer(frame, dtype=self.dtype, count=1)
+        return np.frombuffer(self.bytes_view(frame), dtype=self.dtype, count=1)
 
 
 def frame_layout(rig: RigSpec) -> FrameLayout:

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from typing import Any, Protocol
 
+from edge.control.law import TickFrame
 from edge.drivers.base import Device, installed_drivers
 from edge.errors import ConfigError
 from edge.hal.clock import Clock, MonotonicClock
@@ -64,7 +65,7 @@ class Rig:
         self.errors[device.name] = str(exc)
         return exc.errno or errno.EIO
 
-    def read(self, frame: Any) -> None:
+    def read(self, frame: TickFrame) -> None:
         """Every input device into ``frame``; a failed device's channels become NaN."""
         pending = self._pending_errors
         for device, status, fields in self._readers:
@@ -77,7 +78,7 @@ class Rig:
                     setattr(frame, name, math.nan)
             setattr(frame, status, code)
 
-    def write(self, frame: Any) -> None:
+    def write(self, frame: TickFrame) -> None:
         """Every device's outputs from ``frame``; the result stays in ``wr_<device>``."""
         for device, status in self._writers:
             try:
@@ -86,7 +87,7 @@ class Rig:
             except OSError as exc:
                 setattr(frame, status, self._record(device, exc))
 
-    def prepare(self, frame: Any) -> None:
+    def prepare(self, frame: TickFrame) -> None:
         """Start the next conversions (pipelining); a failure shows in the next read's status."""
         for device, _, _ in self._readers:
             try:

@@ -19,7 +19,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -28,6 +28,7 @@ from edge.control.joint import JointController
 from edge.control.pid import PIDGains
 from edge.control.reference import Reference, beyond_reach
 from edge.control.tick import Controller, Limits, Readings
+from edge.control.twin import ForwardModel
 from edge.errors import BusError, DataError
 from edge.runtime.bundle import Bundle
 from edge.runtime.config import RigConfig
@@ -142,6 +143,7 @@ class EdgeRuntime:
             bundle.require_units("deg" if spec.is_joint else "bar", self.unit)
         correction = None
         self.feedforward_role = ""
+        self.twin_model = ""  # "net" or "table" when the forward twin runs
         if bundle is not None and not spec.is_joint:
             from edge.control.net_roles import choose_role
 
@@ -165,7 +167,7 @@ class EdgeRuntime:
             self.controller = JointController(reference, gains, j, table, limits, j.feedback == "through_model")
         else:
             gains = PIDGains(c.kp_bar_per_mm, c.ki_bar_per_mm_s, c.kd_bar_s_per_mm, c.derivative_filter_s)
-            forward = bundle.forward if twin and bundle is not None else None  # the forward twin watches the muscle
+            forward = self._forward_twin(bundle) if twin and bundle is not None else None  # watches the muscle
             adapt = (
                 OutputMapEstimator(config.adapt, config.period_s, output_span(bundle))
                 if config.adapt.enabled and forward is not None and bundle is not None and inverse is not None
@@ -180,7 +182,8 @@ class EdgeRuntime:
             if ch.kind == ANALOG_IN and (math.isfinite(ch.minimum) or math.isfinite(ch.maximum))
         )
         self.rig = rig or open_rig(config, self.layout)
-        self.supervisor = Supervisor(
+        # the frame is the rig's ctypes row; the law (muscle or joint) fixes which fields it fills
+        self.supervisor: Supervisor[Any] = Supervisor(
             self.controller, config.safety, self.layout.status_fields, channel_limits, config.period_s,
             device_errors=self.rig.errors, output_field=spec.output_field,
             vent_fields=tuple(ch.field for ch in spec.channels if ch.name == "valve_b"),
@@ -227,7 +230,7 @@ class EdgeRuntime:
             "feedforward": self.controller.inverse is not None,
             "feedforward_role": self.feedforward_role if self.controller.inverse is not None else "",
             "correction": self.controller.correction is not None,
-            "twin": getattr(self.controller, "twin", None) is not None,
+            "twin": self.controller.twin is not None,
             "adapt": dataclasses.asdict(self.config.adapt) if getattr(self.controller, "adapt", None) else None,
             "states": [s.value for s in State],
             "faults": {f.value: f.name.lower() for f in Fault},
@@ -344,11 +347,21 @@ class EdgeRuntime:
             **self._twin_record(),
         }
 
+    def _forward_twin(self, bundle: Bundle) -> ForwardModel:
+        """The twin: the forward net when the net feedforward runs and the bundle holds one (it
+        models the rate dependence the net inverse compensates), else the forward table."""
+        if self.feedforward_role.startswith("net") and "forward" in bundle.net_paths:
+            self.twin_model = "net"
+            return bundle.forward_net(self.config.period_s)
+        self.twin_model = "table"
+        return bundle.forward
+
     def _twin_record(self) -> dict[str, object]:
         """The twin's worst window RMS [mm] and the adaptation's final map, when they ran."""
         watch, adapt = self.supervisor.twin_watch, getattr(self.controller, "adapt", None)
         record: dict[str, object] = {}
         if watch is not None:
+            record["twin_model"] = self.twin_model
             record["twin_rms_max_mm"] = watch.worst_rms_mm
             record["twin_warning_t"] = watch.warned_at_s
         if adapt is not None:
@@ -438,11 +451,11 @@ class EdgeRuntime:
                     record_csv()
                 if record_live is not None:
                     record_live()
-                if supervisor._bus_errors != streak:
-                    streak = supervisor._bus_errors
+                if supervisor.bus_error_streak != streak:
+                    streak = supervisor.bus_error_streak
                     if streak:
                         self._device_error_ticks += 1
-                        self._event(t, "device_error", supervisor._device_fault(frame) or "device error")
+                        self._event(t, "device_error", supervisor.device_fault(frame) or "device error")
                 if profile and phase is not None and tick < len(phase):
                     t4 = clock_ns()
                     phase[tick] = (t1 - t0, t2 - t1, t3 - t2, t4 - t3, (c2 - c1) + (cpu_ns() - c3) if timed_cpu else 0)

@@ -16,14 +16,14 @@ angle, and an encoder at rest reads the same count.
 
 from __future__ import annotations
 
+import ctypes
 import errno as errno_codes
 import math
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Any
+from typing import Generic, TypeVar
 
-from edge.control.joint import JointController
-from edge.control.tick import Command, Controller, Readings, ScratchFrame
+from edge.control.law import ControlLaw, Readings, TickFrame
 from edge.control.twin import TWIN_FAULT, TWIN_WARN, TwinWatch
 from edge.runtime.mismatch import MismatchMonitor
 
@@ -87,27 +87,6 @@ class SafetyLimits:
     twin_mismatch_mm: float = 0.0
 
 
-@dataclass(slots=True)
-class Health:
-    """For :meth:`Supervisor.tick` (no frame): what the caller learned apart from the readings."""
-
-    bus_error: bool = False
-    overrun: bool = False
-    estop: bool = False
-
-
-@dataclass(slots=True)
-class Outcome:
-    """:meth:`Supervisor.tick`'s decision: command, valve enable, state, fault."""
-
-    pressure_bar: float
-    valve_enabled: bool
-    state: State
-    fault: str | None = None
-    command: Command | None = None
-    fault_kind: Fault | None = None
-
-
 @dataclass
 class StuckDetector:
     """Flags a reading frozen to the bit while the command sweeps (see module docstring)."""
@@ -140,12 +119,15 @@ def _errno_name(code: int) -> str:
     return errno_codes.errorcode.get(code, str(code))
 
 
+F = TypeVar("F", bound=TickFrame)
+
+
 @dataclass
-class Supervisor:
+class Supervisor(Generic[F]):
     """Runs ``controller`` while everything is healthy; vents and latches on the first fault.
 
     Args:
-        controller: the control law.
+        controller: the control law (:class:`edge.control.law.ControlLaw` on frames ``F``).
         limits: the ``[safety]`` bounds.
         status_fields: ``(device, read field, write field)`` of every device in the frame.
         channel_limits: ``(field, min, max)`` of further channels to range-check.
@@ -157,7 +139,7 @@ class Supervisor:
             second muscle).
     """
 
-    controller: Controller | JointController
+    controller: ControlLaw[F]
     limits: SafetyLimits = field(default_factory=SafetyLimits)
     status_fields: tuple[tuple[str, str, str], ...] = ()
     channel_limits: tuple[tuple[str, float, float], ...] = ()
@@ -170,11 +152,11 @@ class Supervisor:
     vent_fields: tuple[str, ...] = ()
     pressure_fields: tuple[str, ...] = ()
     twin_span_mm: float = 0.0  # the bundle's output span: the twin's warning bound is a share of it
-    _bus_errors: int = 0
+    bus_error_streak: int = field(init=False, default=0)  # ticks in a row with a device error (read only)
     _overruns: int = 0
     _armed_at: float = math.nan
     _stuck: tuple[StuckDetector, StuckDetector] = field(init=False)
-    _status: Any = None
+    _status: ctypes.Array[ctypes.c_char] | None = None
     _status_zero: bytes = b""
     mismatch: MismatchMonitor | None = field(init=False, default=None)
     twin_watch: TwinWatch | None = field(init=False, default=None)
@@ -183,8 +165,6 @@ class Supervisor:
     def __post_init__(self) -> None:
         self._period_us = self.period_s * 1e6
         lim = self.limits
-        # the command whose sweep must move the output: a joint's co-contraction moves no angle
-        self._sweep_attr = "_last_diff_bar" if self.output_field == "angle_deg" else "_last_bar"
         if self.output_field == "angle_deg":
             self._y_range = (lim.angle_min_deg, lim.angle_max_deg, lim.tracking_error_max_deg, "angle", "deg")
         else:
@@ -199,7 +179,8 @@ class Supervisor:
         if self.controller.inverse is not None and lim.mismatch_share > 0:  # only a model can mismatch
             self.mismatch = MismatchMonitor(lim.mismatch_share, lim.mismatch_window_s, "deg" if joint else "bar")
         self._feedback_field = "u_fb_deg" if joint else "u_fb_bar"
-        if getattr(self.controller, "twin", None) is not None:
+        self._residual_field = "twin_residual_mm"  # only a muscle's frame has it (and a twin)
+        if self.controller.twin is not None:
             self.twin_watch = TwinWatch(
                 lim.twin_warn_share * self.twin_span_mm, lim.twin_mismatch_mm, lim.twin_window_s, self.period_s
             )
@@ -208,7 +189,7 @@ class Supervisor:
         if self.state is not State.CONFIGURED:
             raise RuntimeError(f"cannot arm from {self.state.value}; reset first")
         self.controller.arm(readings)
-        self._bus_errors = self._overruns = 0
+        self.bus_error_streak = self._overruns = 0
         self._armed_at = math.nan
         for detector in self._stuck:
             detector.reset()
@@ -222,20 +203,21 @@ class Supervisor:
         """Leave the latched safe state (an operator's explicit action)."""
         self.state, self.fault, self.fault_kind = State.CONFIGURED, None, None
 
-    def trip(self, frame: Any, kind: Fault, reason: str) -> None:
+    def trip(self, frame: F, kind: Fault, reason: str) -> None:
         """Vent and latch (first fault wins); also for faults found outside the tick."""
         if self.state is not State.SAFE:
             self.state, self.fault, self.fault_kind = State.SAFE, reason, kind
         self._vent(frame)
 
-    def _vent(self, frame: Any) -> None:
-        frame.u_bar, frame.valve_enable = 0.0, 0.0
+    def _vent(self, frame: F) -> None:
+        self.controller.vent(frame)
+        frame.valve_enable = 0.0
         for name in self.vent_fields:
             setattr(frame, name, 0.0)
         frame.state = STATE_CODES[self.state]
         frame.fault = self.fault_kind.value if self.fault_kind else 0
 
-    def _device_fault(self, frame: Any) -> str | None:
+    def device_fault(self, frame: F) -> str | None:
         """The one rule: the first device whose read or latest write failed, described."""
         for device, read, write in self.status_fields:
             code = getattr(frame, read)
@@ -246,12 +228,12 @@ class Supervisor:
                 return f"{device} write failed ({_errno_name(code)}): {self.device_errors.get(device, '')}".rstrip(": ")
         return None
 
-    def bind(self, status: Any) -> None:
+    def bind(self, status: ctypes.Array[ctypes.c_char]) -> None:
         """Check the device statuses of the frame through ``status``, a ctypes byte array over
         all its ``rd_*`` / ``wr_*`` fields (one comparison per tick instead of one per field)."""
         self._status, self._status_zero = status, bytes(len(status.raw))
 
-    def step(self, frame: Any, dt: float) -> None:
+    def step(self, frame: F, dt: float) -> None:
         """Check ``frame`` (read this tick) and fill its command, or vent it (see module doc)."""
         state = self.state
         if state is State.CONFIGURED or state is State.SAFE:
@@ -263,15 +245,15 @@ class Supervisor:
         status = self._status
         failed = None
         if status is None or status.raw != self._status_zero:
-            failed = self._device_fault(frame) if self.status_fields else None
+            failed = self.device_fault(frame) if self.status_fields else None
         if failed is not None:
-            self._bus_errors += 1
-            if self._bus_errors >= lim.bus_error_streak:
+            self.bus_error_streak += 1
+            if self.bus_error_streak >= lim.bus_error_streak:
                 return self.trip(
-                    frame, Fault.BUS, f"{self._bus_errors} consecutive ticks with a device error; {failed}"
+                    frame, Fault.BUS, f"{self.bus_error_streak} consecutive ticks with a device error; {failed}"
                 )
-        elif self._bus_errors:
-            self._bus_errors = 0
+        elif self.bus_error_streak:
+            self.bus_error_streak = 0
         if frame.lateness_us > self._period_us:
             self._overruns += 1
             if self._overruns >= lim.overrun_streak:
@@ -282,9 +264,7 @@ class Supervisor:
         controller = self.controller
         if failed is not None and y != y:  # the sensor's device failed this tick: hold
             frame.valve_enable = 1.0
-            frame.u_bar = 0.0 if state is State.ARMED else controller._last_bar
-            for name in self.vent_fields:  # a joint's second valve holds as the first does
-                setattr(frame, name, 0.0 if state is State.ARMED else getattr(controller, "_last_b_bar", 0.0))
+            controller.hold(frame, state is State.ARMED)
             frame.state, frame.fault = STATE_CODES[state], 0
             return None
         y_min, y_max, track_max, label, unit = self._y_range
@@ -311,17 +291,23 @@ class Supervisor:
                     return self.trip(frame, Fault.SENSOR_RANGE, f"{name} {value:.3g} outside {low:g}..{high:g}")
         if self._armed_at != self._armed_at:
             self._armed_at = t
-        last = getattr(controller, self._sweep_attr)
+        last = controller.sweep_command_bar
         stuck_y, stuck_p = self._stuck
-        frozen = stuck_y.stuck_for(t, y, last)
-        if frozen:
-            return self._stuck_trip(frame, label, y, frozen)
-        if p == p:
-            frozen = stuck_p.stuck_for(t, p, last)
+        if y != stuck_y._value:  # a live reading changes (nearly) every tick: the detector restarts, inline
+            stuck_y._value, stuck_y._since, stuck_y._low, stuck_y._high = y, t, last, last
+        else:
+            frozen = stuck_y.stuck_for(t, y, last)
             if frozen:
-                return self._stuck_trip(frame, "pressure", p, frozen)
+                return self._stuck_trip(frame, label, y, frozen)
+        if p == p:
+            if p != stuck_p._value:
+                stuck_p._value, stuck_p._since, stuck_p._low, stuck_p._high = p, t, last, last
+            else:
+                frozen = stuck_p.stuck_for(t, p, last)
+                if frozen:
+                    return self._stuck_trip(frame, "pressure", p, frozen)
         u = controller.fill_from(frame, dt, t, y, p)
-        bias = controller.bias_bar_
+        bias = controller.last_bias
         if bias - bias != 0.0:  # inf or nan
             return self.trip(
                 frame,
@@ -330,7 +316,7 @@ class Supervisor:
             )
         if u - u != 0.0:
             return self.trip(frame, Fault.MODEL_OUTPUT, "control output is not finite")
-        error = controller.reference_mm_ - y
+        error = controller.last_reference - y
         if t - self._armed_at >= lim.tracking_grace_s:
             if error > track_max or -error > track_max:
                 return self.trip(frame, Fault.TRACKING, f"tracking error {abs(error):.1f} {unit} > {track_max} {unit}")
@@ -341,7 +327,7 @@ class Supervisor:
                 self.warnings.append(mismatch.warning or "model mismatch")
             watch = self.twin_watch
             if watch is not None:
-                verdict = watch.add(t, frame.twin_residual_mm)
+                verdict = watch.add(t, getattr(frame, self._residual_field))
                 if verdict == TWIN_FAULT:
                     return self.trip(frame, Fault.TWIN_MISMATCH, watch.fault or "forward twin mismatch")
                 if verdict == TWIN_WARN:
@@ -350,54 +336,10 @@ class Supervisor:
         frame.valve_enable, frame.state, frame.fault = 1.0, RUNNING_CODE, 0
         return None
 
-    def _stuck_trip(self, frame: Any, label: str, value: float, frozen: float) -> None:
+    def _stuck_trip(self, frame: F, label: str, value: float, frozen: float) -> None:
         self.trip(
             frame,
             Fault.SENSOR_STUCK,
             f"{label} sensor stuck at {value:.3f} for {frozen:.2f} s while the command swept "
             f"> {self.limits.stuck_command_span_bar} bar",
         )
-
-    def tick(self, t: float, dt: float, readings: Readings | None, health: Health | None = None) -> Outcome:
-        """:meth:`step` on plain values (no frame); ``readings`` is None when the sensors could
-        not be read this tick."""
-        health = health or Health()
-        frame = ScratchFrame(t, *(readings.contraction_mm, readings.pressure_bar) if readings else (math.nan, math.nan))
-        frame.estop = 1.0 if health.estop else 0.0
-        frame.lateness_us = 2e6 * self.period_s if health.overrun else 0.0
-        bus_error = health.bus_error or readings is None
-        saved = self.status_fields
-        if bus_error:
-            self.status_fields = (("sensors", "bus_error", "bus_error"),)
-        try:
-            frame_with_status = _WithStatus(frame, 5 if bus_error else 0)  # EIO
-            self.step(frame_with_status, dt)
-        finally:
-            self.status_fields = saved
-        valve = frame.valve_enable == 1.0
-        command = None
-        if valve and self.state is State.RUNNING and readings is not None:
-            u = frame.u_bar
-            command = Command(
-                u,
-                frame.reference_mm,
-                frame.u_ff_bar,
-                frame.u_nn_bar,
-                frame.u_fb_bar,
-                u != frame.u_ff_bar + frame.u_nn_bar + frame.u_fb_bar,
-            )
-        return Outcome(frame.u_bar if valve else 0.0, valve, self.state, self.fault, command, self.fault_kind)
-
-
-class _WithStatus:
-    """A scratch frame plus one status field (``bus_error``) for :meth:`Supervisor.tick`."""
-
-    def __init__(self, frame: ScratchFrame, code: int) -> None:
-        object.__setattr__(self, "_frame", frame)
-        object.__setattr__(self, "bus_error", code)
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._frame, name)
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        setattr(self._frame, name, value)
