@@ -21,13 +21,13 @@ EXAMPLE = Path(__file__).resolve().parent.parent / "docs" / "examples" / "hil-ri
 SINE = "sine:amplitude=20,frequency=0.5,offset=35"
 
 
-def rig_config(directory: Path, role: str | None) -> Path:
+def rig_config(directory: Path, role: str | None, twin: str | None = None) -> Path:
     text = EXAMPLE.read_text().replace(
         'url = "sim://rig?clock=lockstep"', 'url = "sim://rig?clock=lockstep&effect=rate_dependence&seed=1"'
     )
-    if role is not None:
-        text += f'\n[feedforward]\nrole = "{role}"\n'
-    path = directory / f"rig-{role or 'default'}.toml"
+    if role is not None or twin is not None:
+        text += "\n[feedforward]\n" + (f'role = "{role}"\n' if role else "") + (f'twin = "{twin}"\n' if twin else "")
+    path = directory / f"rig-{role or 'default'}-{twin or 'table'}.toml"
     path.write_text(text)
     return path
 
@@ -178,7 +178,7 @@ def test_the_default_role_is_a_net_when_there_is_one_plus_the_correction_when_th
 
 
 def test_the_net_feedforward_runs_the_forward_net_as_twin(trained, capsys):
-    """With role net the twin is the forward net, stepped at its own period like the inverse:
+    """With role net and twin net the twin is the forward net, stepped at its own period like the inverse:
     the run's twin_mm is the forward net replayed over the run's measured pressure, and the
     summary says which twin ran. Whether it fits the rate-dependent muscle better than the table
     is a property of the training (this net has 4 epochs), measured in the twin bench."""
@@ -186,7 +186,7 @@ def test_the_net_feedforward_runs_the_forward_net_as_twin(trained, capsys):
 
     root, _, store = trained
     telemetry = root / "net-twin.pmt"
-    code = main(["edge", "run", "--config", str(rig_config(root, "net")), "--bundle", str(store), "--reference",
+    code = main(["edge", "run", "--config", str(rig_config(root, "net", "net")), "--bundle", str(store), "--reference",
                  "sine:amplitude=20,frequency=1,offset=35", "--duration", "3", "--telemetry", str(telemetry),
                  "--json"])  # fmt: skip
     summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
@@ -209,3 +209,19 @@ def test_the_table_feedforward_keeps_the_table_twin(trained, capsys):
                  SINE, "--duration", "1", "--json"])  # fmt: skip
     summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert code == 0 and summary["twin_model"] == "table"
+
+
+def test_the_net_role_keeps_the_table_twin_by_default_and_a_net_twin_needs_a_net_role(trained, capsys):
+    root, _, store = trained
+    code = main(["edge", "run", "--config", str(rig_config(root, "net")), "--bundle", str(store), "--reference",
+                 SINE, "--duration", "1", "--json"])  # fmt: skip
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert code == 0 and summary["twin_model"] == "table"
+    code = main(["edge", "run", "--config", str(rig_config(root, "table", "net")), "--bundle", str(store),
+                 "--reference", SINE, "--duration", "1"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2 and 'twin = "net" needs a net feedforward role' in err and "Traceback" not in err
+    code = main(["edge", "run", "--config", str(rig_config(root, "net", "model")), "--bundle", str(store),
+                 "--reference", SINE, "--duration", "1"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2 and 'twin = "model" is unknown' in err and err.count("\n") == 1

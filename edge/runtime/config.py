@@ -86,9 +86,13 @@ class BundleSection:
 
 @dataclass(frozen=True)
 class FeedforwardSection:
-    """Which feedforward role runs (``edge.control.net_roles``); empty: the bundle's default."""
+    """Which feedforward role runs (``edge.control.net_roles``); empty: the bundle's default.
+    ``twin``: the forward model that watches the muscle, ``table`` (default) or ``net`` (the
+    bundle's forward net, with a net role only). The table is the default because the forward
+    net raised false twin warnings on the muscle it was trained on (one run each at 1 and 0.2 Hz)."""
 
     role: str = ""
+    twin: str = "table"
 
 
 @dataclass(frozen=True)

@@ -348,9 +348,17 @@ class EdgeRuntime:
         }
 
     def _forward_twin(self, bundle: Bundle) -> ForwardModel:
-        """The twin: the forward net when the net feedforward runs and the bundle holds one (it
-        models the rate dependence the net inverse compensates), else the forward table."""
-        if self.feedforward_role.startswith("net") and "forward" in bundle.net_paths:
+        """The twin: the forward table, or with ``[feedforward] twin = "net"`` the bundle's forward net
+        (it models the rate dependence the net inverse compensates; a net role is needed)."""
+        wanted, source = self.config.feedforward.twin, self.config.source
+        if wanted not in ("table", "net"):
+            raise DataError(f'{source}: [feedforward] twin = "{wanted}" is unknown; use "table" or "net"')
+        if wanted == "net":
+            if not (self.feedforward_role.startswith("net") and "forward" in bundle.net_paths):
+                raise DataError(
+                    f'{source}: [feedforward] twin = "net" needs a net feedforward role and a bundle with a forward '
+                    f'net (role here: {self.feedforward_role or "none"}); use twin = "table"'
+                )
             self.twin_model = "net"
             return bundle.forward_net(self.config.period_s)
         self.twin_model = "table"
