@@ -35,6 +35,8 @@ Usage: python bench/edge_bench.py [--seconds 60] [--skip-realtime] [--before DIR
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import shutil
 import signal
 import subprocess
@@ -92,12 +94,14 @@ def profiled_run(
     nn: bool = True,
     twin: bool = True,
     adapt: bool = False,
+    feedforward: dict | None = None,
 ):
-    """A lockstep run with per-phase timing; ``timed`` also wraps inverse, NN and PID."""
+    """A lockstep run with per-phase timing; ``timed`` also wraps inverse, NN and PID;
+    ``feedforward``: the rig config's [feedforward] section (role, twin)."""
     n = int(seconds * 1000)
     with tempfile.TemporaryDirectory() as tmp:
         edge = EdgeRuntime(
-            rig_config(adapt={"enabled": adapt}),
+            rig_config(adapt={"enabled": adapt}, feedforward=feedforward or {}),
             load_bundle(bundle),
             parse_reference("sine:amplitude=30,frequency=0.2,offset=40"),
             telemetry_path=Path(tmp) / "t.pmt",
@@ -137,7 +141,7 @@ def breakdown(bundle: Path, seconds: float = 20.0) -> None:
 
 
 def whole_tick(
-    bundle: Path, seconds: float, nn: bool, repeats: int, **variant: bool
+    bundle: Path, seconds: float, nn: bool, repeats: int, **variant: object
 ) -> list[tuple[float, float, float, float, float]]:
     """(wall median, wall p99, CPU median, CPU p99 [us], run CPU / wall) of each repeat."""
     rows = []
@@ -379,6 +383,50 @@ def twin_table(bundle: Path, seconds: float, repeats: int) -> None:
         print(f"{'':<28} CPU median / table only: {np.median([r[2] for r in values]) / base:.2f}x")
 
 
+NET_VARIANTS: dict[str, dict[str, object]] = {
+    "table, no twin": {"twin": False, "feedforward": {"role": "table"}},
+    "table + table twin": {"twin": True, "feedforward": {"role": "table"}},
+    "LSTM net + table twin": {"twin": True, "feedforward": {"role": "net"}},
+    "LSTM net + net twin": {"twin": True, "feedforward": {"role": "net", "twin": "net"}},
+}
+
+
+def net_bundle(root: Path) -> Path:
+    """An LSTM-NARMAX bundle whose nets step every tick: a 12 s ``edge record`` at 1 kHz on the
+    emulated rig, trained for 3 epochs (its accuracy does not matter for the timing)."""
+    from host.cli import main as pmactl
+
+    recording, store = root / "rec.csv", root / "net-store"
+    config = Path(__file__).resolve().parent.parent / "docs" / "examples" / "hil-rig.toml"
+    for argv in (
+        ["edge", "record", "--config", str(config), "--protocol", "sines", "--duration", "12", "--sample-hz", "1000",
+         "--range", "0:6", "--out", str(recording)],
+        ["train", "--model", "lstm-narmax", "--train", str(recording), "--units", "bar,mm", "--epochs", "3",
+         "--save", str(store), "--json"],
+    ):  # fmt: skip
+        with contextlib.redirect_stdout(io.StringIO()):
+            if pmactl(argv) != 0:
+                raise SystemExit(f"pmactl {' '.join(argv)} failed")
+    return store / "current"
+
+
+def nets_table(root: Path, seconds: float, repeats: int) -> None:
+    """Whole-tick compute with the LSTM-NARMAX inverse net stepping every tick, with the table
+    twin and with the net twin, beside the table-only tick (rows interleaved)."""
+    bundle = net_bundle(root)
+    print(f"\nWhole tick with the nets stepping every tick, {seconds:g} s lockstep runs x {repeats} (us per tick)")
+    print(f"{'tick':<28} {'wall med':>8} {'wall p99':>8} {'CPU med':>8} {'CPU p99':>8} {'CPU/wall':>8}")
+    rows: dict[str, list] = {name: [] for name in NET_VARIANTS}
+    for _ in range(repeats):
+        for name, variant in NET_VARIANTS.items():
+            rows[name] += whole_tick(bundle, seconds, False, 1, **variant)
+    base = np.median([r[2] for r in rows["table, no twin"]])
+    for name, values in rows.items():
+        for row in values:
+            print(f"{name:<28} {row[0]:8.2f} {row[1]:8.2f} {row[2]:8.2f} {row[3]:8.2f} {row[4]:8.2f}")
+        print(f"{'':<28} CPU median / table, no twin: {np.median([r[2] for r in values]) / base:.2f}x")
+
+
 def flat_tick(bundle: Path, seconds: float, between: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """The reference for the whole tick: one flat loop doing the same arithmetic with no
     plumbing (issue 32): ADC scaling of two codes, the reference, the bundle's inverse table
@@ -532,6 +580,9 @@ def main() -> None:
     parser.add_argument("--only-live", type=int, metavar="N", help="only the with/without --live table, N repeats")
     parser.add_argument("--only-twin", type=int, metavar="N", help="only the forward-twin tick table, N repeats")
     parser.add_argument("--only-lean", type=int, metavar="N", help="only the whole tick vs the flat loop, N repeats")
+    parser.add_argument(
+        "--only-nets", type=int, metavar="N", help="only the LSTM-net feedforward and twin tick table, N repeats"
+    )
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         bundle = make_bundle(Path(tmp))
@@ -547,6 +598,9 @@ def main() -> None:
             return
         if args.only_lean:
             lean_table(bundle, args.compute_seconds, args.only_lean, args.before)
+            return
+        if args.only_nets:
+            nets_table(Path(tmp), args.compute_seconds, args.only_nets)
             return
         breakdown(bundle)
         compute_table(bundle, args.compute_seconds, args.repeats, args.before)
