@@ -49,8 +49,8 @@ from host.diagnose.v3 import choose, decide, score  # noqa: E402
 
 
 def overridden(text: str, rules: Rules = RULES) -> Rules:
-    """``rules`` with ``field=value`` overrides (comma-separated; bools as true/false, tuples
-    not supported); ValueError naming an unknown field."""
+    """``rules`` with ``field=value`` overrides (comma-separated; bools as true/false, tuples of
+    numbers slash-separated: ``output_lags_s=0/0.01/0.1``); ValueError naming an unknown field."""
     known = {f.name: f for f in fields(Rules)}
     changes: dict[str, Any] = {}
     for item in filter(None, text.split(",")):
@@ -64,6 +64,8 @@ def overridden(text: str, rules: Rules = RULES) -> Rules:
             changes[key] = int(raw)
         elif isinstance(current, float):
             changes[key] = float(raw)
+        elif isinstance(current, tuple):
+            changes[key] = tuple(float(v) for v in filter(None, raw.split("/")))
         else:
             raise ValueError(f"--rules: {key} is not a number or a flag")
     return replace(rules, **changes)
