@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from edge.control.fused_graph import Choice
+from edge.control.ort_session import tick_session
 from edge.errors import BundleError
 
 STATE_SIZES = {"y_lags": 3, "v_lags": 2}
@@ -53,14 +54,7 @@ class HammersteinNet:
         self.path = Path(path)
         if not is_hammerstein(spec) or spec.get("inputs") != ["u", "n"] or spec.get("output") != "y":
             raise BundleError(f"{self.path}: not a Hammerstein step graph description in the manifest; re-export")
-        options = ort.SessionOptions()
-        options.intra_op_num_threads = 1
-        options.inter_op_num_threads = 1
-        options.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
-        try:
-            self._session = ort.InferenceSession(str(self.path), options, providers=["CPUExecutionProvider"])
-        except Exception as exc:  # onnxruntime raises its own types for a corrupt model
-            raise BundleError(f"{self.path}: onnxruntime cannot load the net ({exc}); re-export the bundle") from exc
+        self._session = tick_session(self.path)
         declared = {i.name for i in self._session.get_inputs()}
         if declared != {"u", "n", *STATE_SIZES}:
             raise BundleError(f"{self.path}: graph inputs {sorted(declared)} are not a Hammerstein step; re-export")

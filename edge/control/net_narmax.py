@@ -34,6 +34,7 @@ import numpy as np
 from edge.control.fused import FusedNarmax
 from edge.control.fused_graph import Choice, choose, narmax_from_graph
 from edge.control.onnx_graph import GraphFormatError, read_graph
+from edge.control.ort_session import tick_session
 from edge.errors import BundleError
 from edge.hysteresis.lut import CompiledModel
 
@@ -77,14 +78,7 @@ class NarmaxNet:
         sizes = {str(s.get("input")): int(s.get("size", 0)) for s in state} if isinstance(state, list) else {}
         if list(sizes) != list(STATE_NAMES) or spec.get("inputs") != ["u", "n"] or spec.get("output") != "y":
             raise BundleError(f"{self.path}: not an LSTM-NARMAX step graph description in the manifest; re-export")
-        options = ort.SessionOptions()
-        options.intra_op_num_threads = 1
-        options.inter_op_num_threads = 1
-        options.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
-        try:
-            self._session = ort.InferenceSession(str(self.path), options, providers=["CPUExecutionProvider"])
-        except Exception as exc:  # onnxruntime raises its own types for a corrupt model
-            raise BundleError(f"{self.path}: onnxruntime cannot load the net ({exc}); re-export the bundle") from exc
+        self._session = tick_session(self.path)
         declared = {i.name for i in self._session.get_inputs()}
         if declared != {"u", "n", *STATE_NAMES}:
             raise BundleError(f"{self.path}: graph inputs {sorted(declared)} are not an LSTM-NARMAX step; re-export")

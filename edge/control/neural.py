@@ -29,6 +29,7 @@ import numpy as np
 
 from edge.control.fused_graph import Choice, choose, mlp_from_graph
 from edge.control.onnx_graph import GraphFormatError, read_graph
+from edge.control.ort_session import tick_session
 from edge.errors import BundleError
 
 FEATURES = (
@@ -82,14 +83,7 @@ class NeuralCorrection:
             state_size = int(size) if isinstance(size, int | float | str) else 0
             if state_size <= 0:
                 raise BundleError(f"{self.path}: correction state size must be a positive integer")
-        options = ort.SessionOptions()
-        options.intra_op_num_threads = 1
-        options.inter_op_num_threads = 1
-        options.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
-        try:
-            self._session = ort.InferenceSession(str(self.path), options, providers=["CPUExecutionProvider"])
-        except Exception as exc:  # onnxruntime raises its own exception types for corrupt models
-            raise BundleError(f"{self.path}: onnxruntime cannot load the model ({exc}); re-export it") from exc
+        self._session = tick_session(self.path, "the model")
         self._x = np.zeros((1, len(features)), dtype=np.float32)
         self._y = np.zeros((1, 1), dtype=np.float32)
         self._h_in = np.zeros((1, state_size), dtype=np.float32)
