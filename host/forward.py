@@ -161,8 +161,12 @@ class BundleNetForward:
 
     def run(self, u: NDArray[np.float64], initial: str) -> NDArray[np.float64]:
         """Output for ``u`` [output units] from ``initial`` (see module docstring)."""
+        from edge.control.net_state_space import StateSpaceForward
+
         model = self.model
         model.reset()
+        if isinstance(model, StateSpaceForward):  # no operator: its state starts at rest (zeros) in any case
+            return model.simulate(u)
         x = np.asarray(u, np.float64)
         if model.warp_half_range > 0:
             x = np.tanh((x - model.warp_centre) / model.warp_half_range)
@@ -196,7 +200,7 @@ def load_forward(folder: str | Path, role: str | None = None) -> TableForward | 
     if role == "net" and "forward" not in bundle.net_paths:
         raise BundleError(
             f"{folder}: holds no forward net (a table bundle); drop --role net, or train one with "
-            "pmactl train --model lstm-narmax|hammerstein --save"
+            "pmactl train --model lstm-narmax|hammerstein|state-space --save"
         )
     if role != "table" and "forward" in bundle.net_paths:
         return BundleNetForward(bundle)

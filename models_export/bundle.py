@@ -174,7 +174,7 @@ def _write_nets(staging: Path, nets: Sequence[NetPart], files: dict[str, object]
         shutil.copyfile(part.onnx_path, staging / name)
         files[name] = {"role": f"{part.which}_net", "kind": "onnx", "sha256": sha256_file(staging / name)}
         spec: dict[str, object] = {"file": name, **part.spec}
-        if part.which == "forward":
+        if part.which == "forward" and part.spec.get("model") != "state-space":  # a state-space net has no operator
             if part.operator is None:
                 raise BundleError("the forward net needs its operator model (NetPart.operator)")
             path = write_table(part.operator.compile(), staging / OPERATOR_FILE)

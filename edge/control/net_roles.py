@@ -25,6 +25,7 @@ from edge.hysteresis.lut import CompiledModel, read_table
 
 if TYPE_CHECKING:
     from edge.control.net_narmax import NetForward, NetInverse, StepNet
+    from edge.control.net_state_space import StateSpaceForward
 
 FEEDFORWARD_ROLES = ("table", "table+correction", "net", "net+correction")
 FORWARD_ROLES = ("table", "net")
@@ -50,7 +51,7 @@ def choose_role(available: list[str], wanted: str, source: str) -> str:
         raise BundleError(
             f"{source}: [feedforward] role {wanted!r} needs a part this bundle does not hold (it can fill "
             f"{', '.join(available)}); choose one of those, or train it "
-            "(pmactl train --model lstm-narmax|hammerstein --save)"
+            "(pmactl train --model lstm-narmax|hammerstein|state-space --save)"
         )
     return wanted
 
@@ -94,10 +95,17 @@ def net_inverse(path: Path, spec: Mapping[str, object], table: CompiledModel, pe
     return NetInverse(step_net(path, spec), table, ticks, preview_s)
 
 
-def net_forward(path: Path, spec: Mapping[str, object], release: Path, period_s: float) -> NetForward:
-    """The net forward model (pressure [bar] -> contraction [mm]) with its operator table."""
+def net_forward(
+    path: Path, spec: Mapping[str, object], release: Path, period_s: float
+) -> NetForward | StateSpaceForward:
+    """The net forward model (pressure [bar] -> contraction [mm]): with its operator table, or a
+    state-space step graph (no operator, :mod:`edge.control.net_state_space`)."""
     from edge.control.net_narmax import NetForward
+    from edge.control.net_state_space import StateSpaceForward, StateSpaceNet, is_state_space
 
+    if is_state_space(spec):
+        ticks = ticks_per_step(_spec_float(spec, "step_s", path), period_s, path)
+        return StateSpaceForward(StateSpaceNet(path, spec), ticks)
     operator = spec.get("operator")
     if not isinstance(operator, Mapping) or not isinstance(operator.get("file"), str):
         raise BundleError(f"{path}: the forward net has no operator table entry; re-export the bundle")

@@ -1,7 +1,7 @@
 """One onnxruntime session for a per-tick net: single-threaded, sequential, CPU only.
 
 A 1 kHz tick evaluates one small step at a time, so thread pools would only add wake-up latency;
-every net the edge runs (the correction, the LSTM-NARMAX and Hammerstein step graphs) is opened
+every net the edge runs (the correction, the LSTM-NARMAX, Hammerstein and state-space step graphs) is opened
 here, and a file onnxruntime cannot load is one :class:`BundleError` line.
 """
 

@@ -31,6 +31,7 @@ from edge.hysteresis.lut import CompiledModel, LookupTable, read_table
 
 if TYPE_CHECKING:
     from edge.control.net_narmax import NetForward, NetInverse
+    from edge.control.net_state_space import StateSpaceForward
 
 FORMAT = "pmactl-bundle"
 FORMAT_VERSION = 2
@@ -123,7 +124,7 @@ class Bundle:
             )
         return net_inverse(self.net_paths["inverse"], self.net_spec("inverse"), self.inverse, period_s)
 
-    def forward_net(self, period_s: float) -> NetForward:
+    def forward_net(self, period_s: float) -> NetForward | StateSpaceForward:
         """The forward net (pressure [bar] -> contraction [mm]) at loop period ``period_s`` [s]."""
         from edge.control.net_roles import net_forward
 
@@ -268,7 +269,8 @@ def _net_paths(manifest_path: Path, manifest: dict[str, object], paths: dict[str
             if not isinstance(entry, dict) or entry.get("file") != paths[role].name:
                 raise BundleError(f"{manifest_path}: the {which} net entry names another file; re-export the bundle")
             found[which] = paths[role]
-    if ("forward" in found) != ("operator" in paths):
+    needs_operator = "forward" in found and nets["forward"].get("model") != "state-space"  # its state holds the memory
+    if needs_operator != ("operator" in paths):
         raise BundleError(f"{manifest_path}: a forward net needs its operator table and back; re-export the bundle")
     return found
 

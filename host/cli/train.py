@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -19,7 +18,7 @@ if TYPE_CHECKING:
     from host.train.net_bundle import NetBundle
 
 DEFAULT_EPOCHS = {"hammerstein": 60, "lstm-narmax": 150, "state-space": 250, "correction": 300}
-BUNDLE_MODELS = ("lstm-narmax", "hammerstein")  # --save writes a bundle store
+BUNDLE_MODELS = ("lstm-narmax", "hammerstein", "state-space")  # --save writes a bundle store
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,unused-ignore]
@@ -32,7 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
         required=True,
         choices=["hammerstein", "lstm-narmax", "state-space", "correction"],
         help="hammerstein (Ai2019: MPI + BP net + ARX), lstm-narmax (Wu2025), state-space (linear model + tanh "
-        "net on simulation error: the Bouc-Wen benchmark's winner, not yet deployable), or correction "
+        "net on simulation error: the Bouc-Wen benchmark's winner), or correction "
         "(the edge's inverse correction, added to --bundle)",
     )
     train.add_argument(
@@ -57,9 +56,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
     train.add_argument(
         "--save",
         metavar="DIR",
-        help="lstm-narmax, hammerstein: write a bundle store (tables, the forward net and an inverse LSTM-NARMAX "
-        "trained with --epochs too; new release in an existing store); state-space: a model folder (step.onnx, "
-        "model.json, the training curve); correction: the training curve",
+        help="lstm-narmax, hammerstein, state-space: write a bundle store (tables, the forward net and an inverse "
+        "LSTM-NARMAX trained with --epochs too; new release in an existing store); correction: the training curve",
     )
     add_key_option(train, "(of --save for lstm-narmax and hammerstein, of --bundle for --model correction)")
     add_data_options(train)
@@ -120,17 +118,7 @@ def run(args: argparse.Namespace) -> int:
             "fit_seconds": trained.fit_seconds,
             "tests": tests_json,
         }
-        if args.model in BUNDLE_MODELS:
-            written = _save_bundle(args, trained, records, record, tests)
-        else:  # state-space: a model folder, no edge evaluator yet
-            from host.train import save_model
-
-            folder = save_model(trained, args.save, record)
-            print(
-                f"model folder written to {folder} (step.onnx, model.json, training_curve.png); not a bundle: "
-                "the edge cannot run a state-space model yet",
-                file=sys.stderr,
-            )
+        written = _save_bundle(args, trained, records, record, tests)
     if args.json:
         # the documented keys only (tests/test_train.py); warnings went to stderr
         out: dict[str, object] = {"model": args.model, "fit_seconds": trained.fit_seconds, "tests": tests_json}
