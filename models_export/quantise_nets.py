@@ -134,13 +134,14 @@ class _Stepper:
 
 
 def trajectories(bundle: Bundle, u: NDArray[np.float64], y: NDArray[np.float64]) -> dict[str, NetTrajectory]:
-    """Each net's inputs over one recording (pressure ``u`` [bar], contraction ``y`` [mm]) and its target."""
+    """Each net's inputs over one recording (pressure ``u`` [bar], contraction ``y`` [mm]) and its target;
+    a state-space forward net (inputs ``u, x``, not ``u, n``) is left out: it stays float32."""
     from host.data import Measurement
     from host.train.net_inverse import inverse_data
 
     result: dict[str, NetTrajectory] = {}
     step_s = float(bundle.net_spec("forward" if "forward" in bundle.net_paths else "inverse")["step_s"])  # type: ignore[arg-type]
-    if "forward" in bundle.net_paths:
+    if "forward" in bundle.net_paths and bundle.net_spec("forward").get("model") != "state-space":
         spec = bundle.net_spec("forward")
         operator = spec["operator"]
         assert isinstance(operator, dict)

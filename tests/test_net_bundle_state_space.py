@@ -110,3 +110,15 @@ def test_simulate_runs_the_state_space_net(trained, store, tmp_path, capsys):
     forward = load_bundle(store).forward_net(0.01)
     forward.reset()
     assert np.allclose(net, forward.simulate(load_measurement(held).u), rtol=1e-6, atol=1e-6)
+
+
+def test_quantise_measures_the_inverse_and_leaves_the_state_space_forward_float32(trained, store, tmp_path, capsys):
+    import shutil
+
+    copy = tmp_path / "store"
+    shutil.copytree(store, copy, symlinks=True)
+    capsys.readouterr()
+    assert main(["quantise", str(copy), "--calibration", str(trained[1][1]), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert set(report["nets"]) == {"inverse"}
+    assert load_bundle(copy).forward_net(0.01).kind == "state-space"
