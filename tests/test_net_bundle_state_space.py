@@ -122,3 +122,12 @@ def test_quantise_measures_the_inverse_and_leaves_the_state_space_forward_float3
     report = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert set(report["nets"]) == {"inverse"}
     assert load_bundle(copy).forward_net(0.01).kind == "state-space"
+
+
+def test_edge_run_with_the_state_space_net_as_the_twin(trained, store, capsys):
+    root = trained[0]
+    capsys.readouterr()
+    code = main(["edge", "run", "--config", str(rig_config(root, "net", "net")), "--bundle", str(store),
+                 "--reference", SINE, "--duration", "2", "--json"])  # fmt: skip
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert code == 0 and summary["faults"] == [] and summary["twin_model"] == "net"
