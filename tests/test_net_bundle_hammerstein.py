@@ -14,33 +14,19 @@ import pytest
 
 from edge.runtime.bundle import load_bundle
 from host.cli import main
+from tests.net_recordings import record_train_and_held, train_store
 from tests.test_net_bundle import SINE, rig_config
 
 
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory):
-    root = tmp_path_factory.mktemp("hambundle")
-    config = rig_config(root, None)
-    recordings = []
-    for name, protocol in (
-        ("rec.csv", "sines:frequencies=0.2/0.5/1,amplitudes=1/0.5,cycles=2"),
-        ("held.csv", "sines:frequencies=0.3/0.7,amplitudes=0.8,cycles=2"),
-    ):
-        assert main(["edge", "record", "--config", str(config), "--protocol", protocol, "--range", "0:6",
-                     "--out", str(root / name), "--json"]) == 0  # fmt: skip
-        recordings.append(root / name)
-    assert main(["keygen", "--out", str(root / "keys")]) == 0
-    return root, recordings
+    return record_train_and_held(tmp_path_factory.mktemp("hambundle"))
 
 
 @pytest.fixture(scope="module")
 def store(trained):
     root, (recording, held) = trained
-    target = root / "store"
-    assert main(["train", "--model", "hammerstein", "--train", str(recording), "--test", str(held), "--units",
-                 "bar,mm", "--epochs", "3", "--save", str(target), "--key", str(root / "keys" / "pmactl.key"),
-                 "--json"]) == 0  # fmt: skip
-    return target
+    return train_store(root, recording, held, "hammerstein", 3)
 
 
 def test_the_bundle_holds_the_hammerstein_forward_and_an_inverse_net_and_verifies(trained, store, capsys):
