@@ -59,7 +59,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg,
         help="lstm-narmax, hammerstein, state-space: write a bundle store (tables, the forward net and an inverse "
         "LSTM-NARMAX trained with --epochs too; new release in an existing store); correction: the training curve",
     )
-    add_key_option(train, "(of --save for lstm-narmax and hammerstein, of --bundle for --model correction)")
+    add_key_option(
+        train, "(of --save for lstm-narmax, hammerstein and state-space, of --bundle for --model correction)"
+    )
     add_data_options(train)
     train.set_defaults(run=lazy("host.cli.train"))
 
