@@ -57,6 +57,7 @@ from numpy.typing import NDArray
 from hil.record import record
 from host.data import Measurement, load_measurement
 from host.diagnose.conditional import column_copies as CURRENT_COPIES
+from host.diagnose.groups import clock_hats
 from host.diagnose.heldout import HeldOut
 from host.diagnose.heldout import held_out as CURRENT_HELD_OUT
 from host.diagnose.rules import RULES
@@ -138,10 +139,7 @@ def held_out_beyond_drift(
     """``held_out`` with the drift group's hat functions of the clock added to the baseline when a
     column cause is checked (the proposal ``--column-vs-drift``)."""
     if column is not None:
-        knots = np.linspace(rs.clock[0], rs.clock[-1], RULES.drift_knots)
-        width = knots[1] - knots[0]
-        hats = np.column_stack([np.clip(1.0 - np.abs(rs.clock - k) / width, 0.0, None) for k in knots[1:]])
-        nuisance = np.hstack([nuisance, hats])
+        nuisance = np.hstack([nuisance, np.column_stack(clock_hats(rs, RULES.drift_knots))])
     return CURRENT_HELD_OUT(rs, nuisance, smoothness, group, masks, ridge, rng, column)
 
 

@@ -368,19 +368,26 @@ def c_loop(fifo: bool, ticks: int = 10_000) -> tuple[int, int] | None:
 TWIN_VARIANTS = {"table only (no twin)": {"twin": False}, "+ twin": {}, "+ twin + [adapt]": {"adapt": True}}
 
 
-def twin_table(bundle: Path, seconds: float, repeats: int) -> None:
-    """Whole-tick compute with the forward twin off, on, and with adaptation (rows interleaved)."""
-    print(f"\nWhole-tick compute with the forward twin, {seconds:g} s lockstep runs x {repeats} (us per tick)")
+def variant_table(bundle: Path, seconds: float, repeats: int, title: str, variants: dict[str, dict]) -> None:
+    """Whole-tick compute of each variant (rows interleaved, so a busy spell of the machine hits
+    every variant), with each CPU median as a ratio of the first variant's."""
+    print(f"\n{title}, {seconds:g} s lockstep runs x {repeats} (us per tick)")
     print(f"{'tick':<28} {'wall med':>8} {'wall p99':>8} {'CPU med':>8} {'CPU p99':>8} {'CPU/wall':>8}")
-    rows: dict[str, list] = {name: [] for name in TWIN_VARIANTS}
-    for _ in range(repeats):  # interleaved, so a busy spell of the machine hits every variant
-        for name, variant in TWIN_VARIANTS.items():
+    rows: dict[str, list] = {name: [] for name in variants}
+    for _ in range(repeats):
+        for name, variant in variants.items():
             rows[name] += whole_tick(bundle, seconds, False, 1, **variant)
-    base = np.median([r[2] for r in rows["table only (no twin)"]])
+    first = next(iter(variants))
+    base = np.median([r[2] for r in rows[first]])
     for name, values in rows.items():
         for row in values:
             print(f"{name:<28} {row[0]:8.2f} {row[1]:8.2f} {row[2]:8.2f} {row[3]:8.2f} {row[4]:8.2f}")
-        print(f"{'':<28} CPU median / table only: {np.median([r[2] for r in values]) / base:.2f}x")
+        print(f"{'':<28} CPU median / {first}: {np.median([r[2] for r in values]) / base:.2f}x")
+
+
+def twin_table(bundle: Path, seconds: float, repeats: int) -> None:
+    """Whole-tick compute with the forward twin off, on, and with adaptation."""
+    variant_table(bundle, seconds, repeats, "Whole-tick compute with the forward twin", TWIN_VARIANTS)
 
 
 NET_VARIANTS: dict[str, dict[str, object]] = {
@@ -412,19 +419,9 @@ def net_bundle(root: Path) -> Path:
 
 def nets_table(root: Path, seconds: float, repeats: int) -> None:
     """Whole-tick compute with the LSTM-NARMAX inverse net stepping every tick, with the table
-    twin and with the net twin, beside the table-only tick (rows interleaved)."""
-    bundle = net_bundle(root)
-    print(f"\nWhole tick with the nets stepping every tick, {seconds:g} s lockstep runs x {repeats} (us per tick)")
-    print(f"{'tick':<28} {'wall med':>8} {'wall p99':>8} {'CPU med':>8} {'CPU p99':>8} {'CPU/wall':>8}")
-    rows: dict[str, list] = {name: [] for name in NET_VARIANTS}
-    for _ in range(repeats):
-        for name, variant in NET_VARIANTS.items():
-            rows[name] += whole_tick(bundle, seconds, False, 1, **variant)
-    base = np.median([r[2] for r in rows["table, no twin"]])
-    for name, values in rows.items():
-        for row in values:
-            print(f"{name:<28} {row[0]:8.2f} {row[1]:8.2f} {row[2]:8.2f} {row[3]:8.2f} {row[4]:8.2f}")
-        print(f"{'':<28} CPU median / table, no twin: {np.median([r[2] for r in values]) / base:.2f}x")
+    twin and with the net twin, beside the table-only tick."""
+    title = "Whole tick with the nets stepping every tick"
+    variant_table(net_bundle(root), seconds, repeats, title, NET_VARIANTS)
 
 
 def flat_tick(bundle: Path, seconds: float, between: bool = False) -> tuple[np.ndarray, np.ndarray]:

@@ -97,13 +97,19 @@ def column_group(
     return through_stage(rs, base, np.column_stack(columns))
 
 
-def drift_group(rs: RunSet, base: Baseline, rules: Rules) -> NDArray[np.float64]:
-    """Hat functions of the campaign clock (linear B-splines, ``drift_knots`` of them) and their
-    product with the output: a slow change in time no column explains."""
+def clock_hats(rs: RunSet, knots: int) -> list[NDArray[np.float64]]:
+    """Hat functions (linear B-splines) of the campaign clock on ``knots`` equally spaced knots,
+    the first left out (it is the offset)."""
     clock = rs.clock
-    knots = np.linspace(clock[0], clock[-1], rules.drift_knots)
-    width = knots[1] - knots[0]
-    hats = [np.clip(1.0 - np.abs(clock - k) / width, 0.0, None) for k in knots[1:]]  # the first is the offset
+    grid = np.linspace(clock[0], clock[-1], knots)
+    width = grid[1] - grid[0]
+    return [np.clip(1.0 - np.abs(clock - k) / width, 0.0, None) for k in grid[1:]]
+
+
+def drift_group(rs: RunSet, base: Baseline, rules: Rules) -> NDArray[np.float64]:
+    """Hat functions of the campaign clock (``drift_knots`` of them, :func:`clock_hats`) and their
+    product with the output: a slow change in time no column explains."""
+    hats = clock_hats(rs, rules.drift_knots)
     xc = _scaled(base.x)
     return np.column_stack(hats + [h * xc for h in hats])
 
