@@ -60,7 +60,7 @@ from host.diagnose.conditional import column_copies as CURRENT_COPIES
 from host.diagnose.groups import clock_hats
 from host.diagnose.heldout import HeldOut
 from host.diagnose.heldout import held_out as CURRENT_HELD_OUT
-from host.diagnose.rules import RULES
+from host.diagnose.rules import RULES, Rules
 from host.diagnose.runs import RunSet
 
 # ../shared/data beside the checkout, or $PMACTL_SHARED_DATA (as the tests find it)
@@ -204,13 +204,13 @@ def real_sources() -> dict[str, list[Measurement]]:
     return out
 
 
-def verdict(method: str, runs: list[Measurement]) -> str:
+def verdict(method: str, runs: list[Measurement], rules: Rules = RULES) -> str:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         if method.startswith("v3"):
             from host.diagnose.v3 import diagnose_runs
 
-            return diagnose_runs(runs if method == "v3" else [end_to_end(runs)]).cause
+            return diagnose_runs(runs if method == "v3" else [end_to_end(runs)], rules=rules).cause
         from host.diagnose.run import diagnose
 
         return diagnose(end_to_end(runs), progress=False).cause
@@ -227,7 +227,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--surrogates", choices=("current", "plain"), default="current")
     parser.add_argument("--column-vs-drift", action="store_true", help="the second proposal (module docstring)")
     parser.add_argument("--inject", type=float, default=0.0, help="a real temperature effect (share of y's p-p)")
+    parser.add_argument(
+        "--rules", default="", help="v3 Rules overrides, field=value,... (as bench/diagnose_v3_dump.py)"
+    )
     args = parser.parse_args(argv)
+    from bench.diagnose_v3_dump import overridden
+
+    rules = overridden(args.rules, RULES)
     sources: dict[str, list[Measurement]] = {}
     if "hil" in args.sources:
         sources.update(hil_sources(args.hil_records))
@@ -257,7 +263,9 @@ def main(argv: list[str] | None = None) -> int:
             for method in methods:
                 if method == "v3-1" and len(runs) == 1:
                     continue
-                causes = [verdict(method, with_decoy(runs, shape, seed, args.inject)) for seed in range(args.seeds)]
+                causes = [
+                    verdict(method, with_decoy(runs, shape, seed, args.inject), rules) for seed in range(args.seeds)
+                ]
                 hits = sum(c == target for c in causes)
                 totals[method][0] += hits
                 totals[method][1] += len(causes)
