@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.stats import norm
 from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
@@ -42,7 +43,8 @@ from host.diagnose.conditional import (  # noqa: E402
     stationary_draws,
     whitened,
 )
-from host.diagnose.heldout import HeldOut, held_out, holdout_folds  # noqa: E402
+from host.diagnose.heldout import HeldOut, cluster_labels, held_out, held_out_statistics, holdout_folds
+from host.diagnose.nuisance import ar_whitener  # noqa: E402
 from host.diagnose.rules import CAUSES, RULES, Rules  # noqa: E402
 from host.diagnose.runs import run_set  # noqa: E402
 from host.diagnose.v3 import choose, decide, score  # noqa: E402
@@ -100,10 +102,14 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
     base, groups, tests, _ = score(rs, rules.preisach_levels, rules, seed)
     richer = score(rs, rules.richer_levels, replace(rules, composite_draws=0), seed + 1)[2]
     masks, _ = holdout_folds(rs, rules)
-    trials = {}
+    # every held-out fit once, scored four ways (per row or cluster-robust, raw or whitened errors):
+    # bench/diagnose_replay.py --v3 picks the scoring the rules ask for
+    labels = cluster_labels(rs, replace(rules, heldout_clusters=True))
+    ar = ar_whitener(rs.y - base.prediction, rules.max_ar_order)
+    trials, variants = {}, {}
     for g in groups:
         column = CAUSES[g].column
-        trials[g] = held_out(
+        h = held_out(
             rs,
             base.nuisance,
             base.smoothness,
@@ -113,6 +119,24 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
             np.random.default_rng(seed),
             rs.columns.get(column) if column else None,
         )
+        assert h.scored is not None
+        for clustered in (False, True):
+            for white in (False, True):
+                t, interval = held_out_statistics(
+                    rs,
+                    h.base_prediction,
+                    h.ext_prediction,
+                    h.scored,
+                    np.random.default_rng(seed),
+                    labels if clustered else None,
+                    ar if white else None,
+                )
+                variant = replace(h, clark_west_t=t, clark_west_p=float(norm.sf(t)), interval=interval)
+                variants.setdefault(f"{'clusters' if clustered else 'rows'}/{'white' if white else 'raw'}", {})[g] = (
+                    variant
+                )
+                if clustered == rules.heldout_clusters and white == rules.heldout_whitened:
+                    trials[g] = variant
     ranked, cannot_tell = decide(tests, rules)
     choice = choose(ranked, tests, lambda: richer, trials.__getitem__, rules)
     oracle = None
@@ -126,6 +150,7 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
         "tests": {g: t.as_json() for g, t in tests.items()},
         "richer": {g: _richer_json(t) for g, t in richer.items()},
         "trials": {g: _trial_json(h) for g, h in trials.items()},
+        "trials_by_scoring": {k: {g: _trial_json(h) for g, h in v.items()} for k, v in variants.items()},
         "oracle_p": oracle,
         "baseline_columns": int(base.nuisance.shape[1]),
     }

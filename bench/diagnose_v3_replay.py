@@ -67,8 +67,17 @@ def _richer(row: Line, tests: dict[str, GroupTest]) -> dict[str, GroupTest]:
     return out
 
 
-def _trial(row: Line, g: str) -> HeldOut:
-    h = row["trials"][g]
+def _trials(row: Line, rules: Rules) -> dict[str, Any]:
+    """The dumped held-out scores the rules ask for (per row, or cluster-robust when dumped both ways)."""
+    scoring = f"{'clusters' if rules.heldout_clusters else 'rows'}/{'white' if rules.heldout_whitened else 'raw'}"
+    by = row.get("trials_by_scoring", {})
+    if scoring not in by and scoring != "rows/raw":
+        raise SystemExit(f"this dump has no held-out scoring {scoring}: dump it again with bench/diagnose_v3_dump.py")
+    return dict(by.get(scoring, row["trials"]))
+
+
+def _trial(row: Line, g: str, rules: Rules) -> HeldOut:
+    h = _trials(row, rules)[g]
     return HeldOut(0.0, 0.0, h["gain"], 0.0, (h["lo"], h["hi"]), 0.0, h["cw_p"], [], _EMPTY, _EMPTY)
 
 
@@ -83,7 +92,7 @@ def replay(row: Line, rules: Rules) -> Replayed:
     """The verdict of one dumped record under ``rules``, and where a true effect was lost."""
     tests = _tests(row, rules)
     ranked, _ = decide(tests, rules)
-    choice = choose(ranked, tests, lambda: _richer(row, tests), lambda g: _trial(row, g), rules)
+    choice = choose(ranked, tests, lambda: _richer(row, tests), lambda g: _trial(row, g, rules), rules)
     effect = row["effect"]
     truth = tests.get(effect)
     passed = truth is not None and truth.unique_p <= truth.level
@@ -94,7 +103,7 @@ def replay(row: Line, rules: Rules) -> Replayed:
         elif not passed:
             lost = "unique test" if truth.marginal_p > truth.level else "unique test (marginal passed)"
         elif effect in choice.rejected:
-            h = row["trials"][effect]
+            h = _trials(row, rules)[effect]
             richer = row["richer"].get(effect)
             ladder = (
                 CAUSES[effect].kind == "dynamic"

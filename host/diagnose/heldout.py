@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import norm
 
-from host.diagnose.nuisance import ridge_fit
+from host.diagnose.nuisance import kept_rows, ridge_fit, whiten
 from host.diagnose.rules import Rules
 from host.diagnose.runs import RunSet
 
@@ -44,6 +44,19 @@ def holdout_folds(rs: RunSet, rules: Rules) -> tuple[list[NDArray[np.bool_]], st
     return masks, f"{k} contiguous blocks of about {span:.3g} s, each predicted by a model fitted on the others"
 
 
+def cluster_labels(rs: RunSet, rules: Rules) -> NDArray[np.int64] | None:
+    """What the held-out statistics treat as independent units when ``rules.heldout_clusters``: the
+    runs when the folds leave whole runs out, else contiguous blocks of a twentieth of the record
+    (None: Newey-West per row and moving blocks, as before)."""
+    if not rules.heldout_clusters:
+        return None
+    lengths = [b - a for a, b in rs.bounds()]
+    if rs.n_runs >= 3 and float(np.median(lengths)) < rules.short_run_samples:
+        return np.asarray(rs.run, dtype=np.int64)
+    n = rs.y.size
+    return np.minimum(np.arange(n) * 20 // max(n, 1), 19).astype(np.int64)
+
+
 @dataclass
 class HeldOut:
     base_rmse: float  # [units of y]
@@ -56,6 +69,7 @@ class HeldOut:
     fold_gains: list[float]
     base_prediction: NDArray[np.float64]  # held-out predictions, every row held out once
     ext_prediction: NDArray[np.float64]
+    scored: NDArray[np.bool_] | None = None  # the rows the scores use
 
     def as_json(self) -> dict[str, object]:
         return {
@@ -79,11 +93,19 @@ def held_out(
     ridge: float,
     rng: np.random.Generator,
     column: NDArray[np.float64] | None = None,
+    clusters: NDArray[np.int64] | None = None,
+    whitener: NDArray[np.float64] | None = None,
 ) -> HeldOut:
     """Both models per fold (see module docstring). With a measured ``column``, a fold scores only
     the held-out rows whose column value lies inside its training rows' range: a column term is
     not asked to extrapolate to loads or temperatures it never saw (such rows are left out of
-    every score, the baseline's included)."""
+    every score, the baseline's included). With ``clusters`` (a label per row,
+    :func:`cluster_labels`) the Clark-West standard error and the gain's interval treat each
+    cluster as one independent unit (cluster-robust; a run's errors are correlated as a whole).
+    With ``whitener`` (AR coefficients of the noise model, :func:`host.diagnose.nuisance.ar_whitener`)
+    the Clark-West test and the interval score the held-out errors after the AR filter (the
+    innovations), so slow excursions of a structural misfit do not decide them; the reported RMS and
+    gain stay those of the raw errors [units of y]."""
     y = rs.y
     scored = np.zeros(y.size, dtype=bool)
     base = np.empty_like(y)
@@ -107,21 +129,43 @@ def held_out(
         scored[:] = True  # nothing inside the training ranges: score every row rather than none
     eb, ee = (base[scored] - y[scored]) ** 2, (ext[scored] - y[scored]) ** 2
     base_rmse, ext_rmse = float(np.sqrt(eb.mean())), float(np.sqrt(ee.mean()))
-    gain = 1.0 - ext_rmse / (base_rmse or 1.0)
-    cw = eb - ee + (base[scored] - ext[scored]) ** 2
-    t_cw = float(cw.mean() / _hac_se(cw))
+    t_cw, interval = held_out_statistics(rs, base, ext, scored, rng, clusters, whitener)
     return HeldOut(
         base_rmse,
         ext_rmse,
-        gain,
+        1.0 - ext_rmse / (base_rmse or 1.0),
         base_rmse - ext_rmse,
-        _interval(eb, ee, rng),
+        interval,
         t_cw,
         float(norm.sf(t_cw)),
         fold_gains,
         base,
         ext,
+        scored,
     )
+
+
+def held_out_statistics(
+    rs: RunSet,
+    base: NDArray[np.float64],
+    ext: NDArray[np.float64],
+    scored: NDArray[np.bool_],
+    rng: np.random.Generator,
+    clusters: NDArray[np.int64] | None = None,
+    whitener: NDArray[np.float64] | None = None,
+) -> tuple[float, tuple[float, float]]:
+    """(Clark-West t, 90 % interval of the gain) of the held-out predictions ``base`` and ``ext``
+    on the ``scored`` rows; ``clusters`` and ``whitener`` as in :func:`held_out`."""
+    rb, re = base - rs.y, ext - rs.y
+    if whitener is not None and whitener.size:
+        rb, re = whiten(rs, rb, whitener), whiten(rs, re, whitener)
+        scored = scored & kept_rows(rs, whitener.size)
+    eb, ee = rb[scored] ** 2, re[scored] ** 2
+    cw = eb - ee + (rb[scored] - re[scored]) ** 2
+    labels = None if clusters is None else np.unique(clusters[scored], return_inverse=True)[1]
+    if labels is not None and labels.max() >= 4:
+        return float(cw.mean() / _cluster_se(cw, labels)), _cluster_interval(eb, ee, labels, rng)
+    return float(cw.mean() / _hac_se(cw)), _interval(eb, ee, rng)
 
 
 def _hac_se(f: NDArray[np.float64]) -> float:
@@ -142,5 +186,24 @@ def _interval(eb: NDArray[np.float64], ee: NDArray[np.float64], rng: np.random.G
     starts = rng.integers(0, max(1, n - size), (400, int(np.ceil(n / size))))
     idx = (starts[:, :, None] + np.arange(size)).reshape(400, -1)[:, :n]
     gains = 1.0 - np.sqrt(ee[idx].mean(axis=1) / np.maximum(eb[idx].mean(axis=1), 1e-300))
+    lo, hi = np.percentile(gains, [5, 95])
+    return float(lo), float(hi)
+
+
+def _cluster_se(f: NDArray[np.float64], labels: NDArray[np.intp]) -> float:
+    """Cluster-robust standard error of the mean of ``f`` (one independent unit per label, with the
+    small-sample factor C / (C - 1))."""
+    sums = np.bincount(labels, weights=f - f.mean())
+    c = sums.size
+    return float(np.sqrt(max(float(sums @ sums) * c / (c - 1), 1e-300)) / f.size)
+
+
+def _cluster_interval(
+    eb: NDArray[np.float64], ee: NDArray[np.float64], labels: NDArray[np.intp], rng: np.random.Generator
+) -> tuple[float, float]:
+    """90 % cluster-bootstrap interval of ``1 - sqrt(sum ee / sum eb)`` (clusters drawn with replacement)."""
+    sb, se = np.bincount(labels, weights=eb), np.bincount(labels, weights=ee)
+    draws = rng.integers(0, sb.size, (400, sb.size))
+    gains = 1.0 - np.sqrt(se[draws].sum(axis=1) / np.maximum(sb[draws].sum(axis=1), 1e-300))
     lo, hi = np.percentile(gains, [5, 95])
     return float(lo), float(hi)

@@ -138,10 +138,23 @@ class Rules:
     # causes significant beyond the baseline alone (marginal test) are candidates after the
     # unique passers, each confirmed held out like them
     marginal_candidates: bool = False
+    # a measured column whose unique test passes (against surrogate copies of the same column) is
+    # tried before every dynamic cause and drift: the surrogates calibrate it against any structural
+    # misfit, which the dynamic groups' noise null does not. (Its marginal test is not enough: on a
+    # campaign with a real drift, a wandering decoy column beat its surrogates on 5 of 10 records.)
+    column_first: bool = False
     # a cause passing its unique test is named only when held-out data confirm it (Clark-West p <= alpha)
     heldout_gate: bool = True
     # the held-out confirmation also needs the gain's 90 % interval above 0 (beside Clark-West p <= alpha)
     heldout_interval_gate: bool = True
+    # the held-out Clark-West test and the gain's interval treat whole runs (short runs) or
+    # twentieths of the record as the independent units (cluster-robust), not rows with a
+    # Newey-West window of n^(1/3) rows: a run's or a block's prediction errors move together
+    heldout_clusters: bool = False
+    # the held-out Clark-West test and interval score the prediction errors after the record's AR
+    # noise model (innovations; issue 33's "fold RMSEs are not whitened, so a few slow excursions
+    # decide folds"); the gain reported stays that of the raw errors
+    heldout_whitened: bool = False
     # a cause whose unique test passes on the full record but fails with the richer baseline is the
     # baseline's class, not a cause, when its statistic falls by more than this share
     ladder_drop: float = 0.5

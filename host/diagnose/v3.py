@@ -31,8 +31,8 @@ from host.data import Measurement
 from host.diagnose.composite import class_nuisance, null_classes, simulated_records, unrestricted_residual
 from host.diagnose.conditional import GroupTest, group_tests, whitened
 from host.diagnose.groups import branch_of, cause_groups, column_group
-from host.diagnose.heldout import HeldOut, held_out, holdout_folds
-from host.diagnose.nuisance import Baseline, fit_baseline, with_nuisance
+from host.diagnose.heldout import HeldOut, cluster_labels, held_out, holdout_folds
+from host.diagnose.nuisance import Baseline, ar_whitener, fit_baseline, with_nuisance
 from host.diagnose.rules import CAUSES, RULES, Rules
 from host.diagnose.runs import RunSet, node_differences, preisach_nodes, run_set
 
@@ -147,6 +147,17 @@ def decide(tests: dict[str, GroupTest], rules: Rules = RULES) -> tuple[list[str]
     baseline alone; else those significant only jointly (cannot tell)."""
     unique = [g for g, t in tests.items() if t.unique_p <= t.level]
     ranked = sorted(unique, key=lambda g: (g == "slow_drift", -tests[g].unique_share))
+    if rules.column_first:
+        columns = [g for g in ranked if CAUSES[g].kind == "column"]
+        drift = tests.get("slow_drift")
+        if drift is None or drift.unique_p > drift.level:  # time adds nothing beyond the causes
+            columns += [
+                g
+                for g, t in sorted(tests.items(), key=lambda kv: kv[1].marginal_p)
+                if CAUSES[g].kind == "column" and g not in columns and t.marginal_p <= t.level
+            ]
+        ranked = columns + [g for g in ranked if g not in columns]
+        unique = ranked
     joint = [g for g, t in tests.items() if t.marginal_p <= t.level]
     if rules.marginal_candidates:
         rest = [g for g in joint if g not in unique]
@@ -214,6 +225,7 @@ def diagnose_runs(
         base, groups, tests, notes = score(rs, rules.preisach_levels, rules, seed)
         ranked, cannot_tell = decide(tests, rules)
         masks, holdout = holdout_folds(rs, rules)
+        whitener = ar_whitener(rs.y - base.prediction, rules.max_ar_order)
         richer: dict[str, GroupTest] = {}
         trials: dict[str, HeldOut] = {}
 
@@ -235,6 +247,8 @@ def diagnose_runs(
                 rules.node_ridge,
                 np.random.default_rng(seed),
                 rs.columns.get(column) if column else None,
+                cluster_labels(rs, rules),
+                whitener if rules.heldout_whitened else None,
             )
             return trials[candidate]
 
