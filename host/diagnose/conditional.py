@@ -32,8 +32,8 @@ from host.diagnose.strata import state_strata, within_strata_permutations
 Matrix = NDArray[np.float64]
 
 # surrogate regressors whitened and partialled out together: at most this many float64 values
-# (n x columns x copies) per batch, i.e. about 64 MB
-SURROGATE_BATCH_VALUES = 8_000_000
+# (n x columns x copies) per batch, 16 MB (a few temporaries of that size live at once)
+SURROGATE_BATCH_VALUES = 2_000_000
 # a surrogate's Gram matrix is trusted when every eigenvalue is above this share of its largest
 # before partialling: the statistic is then within ~1e-8 (relative) of the exact projection
 GRAM_TRUST = 1e-8
@@ -120,9 +120,14 @@ def stationary_draws(n: int, mean_block: float, draws: int, rng: np.random.Gener
     starts = rng.integers(0, n, (n, draws))
     fresh[0] = True
     starts[0] = first
-    rows = np.arange(n)[:, None]
-    last = np.maximum.accumulate(np.where(fresh, rows, 0), axis=0)
-    return np.asarray((np.take_along_axis(starts, last, axis=0) + rows - last) % n, dtype=np.intp)
+    rows = np.arange(n, dtype=np.intp)[:, None]
+    last = np.where(fresh, rows, 0).astype(np.intp, copy=False)
+    np.maximum.accumulate(last, axis=0, out=last)
+    idx = np.take_along_axis(starts, last, axis=0).astype(np.intp, copy=False)
+    idx += rows  # in place: three n x draws arrays at most, as the row recursion held
+    idx -= last
+    idx %= n
+    return idx
 
 
 def _stat(basis: Matrix, e: Matrix, sigma2: NDArray[np.float64] | float) -> NDArray[np.float64]:
@@ -394,18 +399,20 @@ def _surrogates(
     basis_e = basis.T @ e
     hits_u = hits_m = 0
     copies, kind = column_copies(w.rs, w.rs.columns[column], rules.column_surrogates, rng)
-    built = [surrogate_group(g, copy) for copy in copies]
-    width = built[0].shape[1] if built else 1
+    # regressors built batch by batch: all copies at once would hold copies x n x width values
+    width = surrogate_group(g, copies[0]).shape[1] if copies else 1
     per_batch = max(1, SURROGATE_BATCH_VALUES // max(e.size * width, 1))
-    for first in range(0, len(built), per_batch):
-        batch = built[first : first + per_batch]
-        x = whiten(w.rs, np.hstack(batch), w.ar)[w.keep]
+    for first in range(0, len(copies), per_batch):
+        batch = [surrogate_group(g, copy) for copy in copies[first : first + per_batch]]
+        widths = [b.shape[1] for b in batch]  # a copy may move within runs where the column does not
+        stacked = np.hstack(batch)
+        del batch
+        x = whiten(w.rs, stacked, w.ar)[w.keep]
+        del stacked
         on_basis = basis.T @ x
         x_e = x.T @ e
-        start = 0
-        for b in batch:
-            cols = slice(start, start + b.shape[1])
-            start += b.shape[1]
+        for start, stop in zip(np.cumsum([0, *widths[:-1]]), np.cumsum(widths)):
+            cols = slice(int(start), int(stop))
             gram = x[:, cols].T @ x[:, cols]
             scale = float(np.max(np.linalg.eigvalsh(gram))) if gram.size else 0.0
             p_n, p_o = on_basis[:k, cols], on_basis[k:, cols]
