@@ -387,16 +387,14 @@ def _surrogates(
 
     Every copy's statistic is ``b^T G^+ b`` with ``G`` its whitened regressors' Gram matrix after
     the nuisance (and the other groups) and ``b`` their product with the residual, both from one
-    product of the stacked bases ``[nuisance | others]`` with a whole batch of copies: a quarter
+    product of the nuisance's and the other groups' bases with a whole batch of copies: a quarter
     of the passes over those n x k bases that partialling out every copy needs. A copy whose Gram
     matrix is near singular (a direction below :data:`GRAM_TRUST` of its whole norm squared,
     where the subtraction loses digits) is scored exactly (:func:`projected_stat`)."""
     column = CAUSES[g].column
     assert column is not None
     e = w.residual
-    basis = np.hstack([w.q_nuisance, q_others])
-    k = w.q_nuisance.shape[1]
-    basis_e = basis.T @ e
+    others_e = q_others.T @ e  # the residual is orthogonal to the nuisance already
     hits_u = hits_m = 0
     copies, kind = column_copies(w.rs, w.rs.columns[column], rules.column_surrogates, rng)
     # regressors built batch by batch: all copies at once would hold copies x n x width values
@@ -409,17 +407,18 @@ def _surrogates(
         del batch
         x = whiten(w.rs, stacked, w.ar)[w.keep]
         del stacked
-        on_basis = basis.T @ x
+        # two products rather than one on the bases stacked: stacking copies an n x k matrix
+        on_nuisance, on_others = w.q_nuisance.T @ x, q_others.T @ x
         x_e = x.T @ e
         for start, stop in zip(np.cumsum([0, *widths[:-1]]), np.cumsum(widths)):
             cols = slice(int(start), int(stop))
             gram = x[:, cols].T @ x[:, cols]
             scale = float(np.max(np.linalg.eigvalsh(gram))) if gram.size else 0.0
-            p_n, p_o = on_basis[:k, cols], on_basis[k:, cols]
+            p_n, p_o = on_nuisance[:, cols], on_others[:, cols]
             g_m = gram - p_n.T @ p_n
-            b_m = x_e[cols] - p_n.T @ basis_e[:k]
+            b_m = x_e[cols]
             g_u = g_m - p_o.T @ p_o
-            b_u = b_m - p_o.T @ basis_e[k:]
+            b_u = b_m - p_o.T @ others_e
             stat_m, stat_u = _gram_stat(g_m, b_m, scale), _gram_stat(g_u, b_u, scale)
             if stat_m is None or stat_u is None:
                 alone = partial_out(w.q_nuisance, x[:, cols])
