@@ -31,6 +31,13 @@ from host.diagnose.strata import state_strata, within_strata_permutations
 
 Matrix = NDArray[np.float64]
 
+# surrogate regressors whitened and partialled out together: at most this many float64 values
+# (n x columns x copies) per batch, 16 MB (a few temporaries of that size live at once)
+SURROGATE_BATCH_VALUES = 2_000_000
+# a surrogate's Gram matrix is trusted when every eigenvalue is above this share of its largest
+# before partialling: the statistic is then within ~1e-8 (relative) of the exact projection
+GRAM_TRUST = 1e-8
+
 
 def orthonormal(m: Matrix, tol: float = 1e-8) -> Matrix:
     """An orthonormal basis of ``m``'s column space (directions below ``tol`` x the largest dropped)."""
@@ -104,13 +111,22 @@ def block_length(residual: NDArray[np.float64]) -> float:
 
 
 def stationary_draws(n: int, mean_block: float, draws: int, rng: np.random.Generator) -> NDArray[np.intp]:
-    """Indices of ``draws`` stationary-bootstrap resamples (n x draws): geometric blocks, wrapped."""
-    idx = np.empty((n, draws), dtype=np.intp)
-    idx[0] = rng.integers(0, n, draws)
+    """Indices of ``draws`` stationary-bootstrap resamples (n x draws): geometric blocks, wrapped.
+
+    Row ``i`` continues the block of the last fresh start at or before ``i`` (row 0 starts one):
+    ``idx[i] = (start[j] + i - j) mod n`` with ``j`` that row, found by a running maximum."""
+    first = rng.integers(0, n, draws)
     fresh = rng.random((n, draws)) < 1.0 / mean_block
     starts = rng.integers(0, n, (n, draws))
-    for i in range(1, n):
-        idx[i] = np.where(fresh[i], starts[i], (idx[i - 1] + 1) % n)
+    fresh[0] = True
+    starts[0] = first
+    rows = np.arange(n, dtype=np.intp)[:, None]
+    last = np.where(fresh, rows, 0).astype(np.intp, copy=False)
+    np.maximum.accumulate(last, axis=0, out=last)
+    idx = np.take_along_axis(starts, last, axis=0).astype(np.intp, copy=False)
+    idx += rows  # in place: three n x draws arrays at most, as the row recursion held
+    idx -= last
+    idx %= n
     return idx
 
 
@@ -287,14 +303,19 @@ def _adjusted(
     n = next(iter(marginal.values())).shape[0] if marginal else 1
     z_u = {g: [] for g in dynamic}  # type: dict[str, list[NDArray[np.float64]]]
     z_m = {g: [] for g in dynamic}  # type: dict[str, list[NDArray[np.float64]]]
+    # every group's unique and marginal basis stacked: one product per chunk of draws
+    bases = [unique[g] for g in dynamic] + [marginal[g] for g in dynamic]
+    stacked = np.hstack(bases) if bases else np.zeros((n, 0))
+    cuts = np.cumsum([b.shape[1] for b in bases], dtype=np.intp)[:-1]
     remaining = rules.bootstrap_draws
     while remaining > 0:
         chunk = min(remaining, max(1, 4_000_000 // n))
         draws = resample(chunk)
-        sigma2 = np.mean(draws**2, axis=0)
-        for g in dynamic:
-            z_u[g].append(_z(_stat(unique[g], draws, sigma2), unique[g].shape[1]))
-            z_m[g].append(_z(_stat(marginal[g], draws, sigma2), marginal[g].shape[1]))
+        sigma2 = np.einsum("ij,ij->j", draws, draws) / draws.shape[0]
+        parts = np.split(stacked.T @ draws, cuts, axis=0)
+        for i, g in enumerate(dynamic):
+            z_u[g].append(_z(np.sum(parts[i] ** 2, axis=0) / sigma2, unique[g].shape[1]))
+            z_m[g].append(_z(np.sum(parts[len(dynamic) + i] ** 2, axis=0) / sigma2, marginal[g].shape[1]))
         remaining -= chunk
     if not dynamic:
         return {}, {}
@@ -339,6 +360,18 @@ def column_copies(
     return out, "reflected circular shifts (as smooth as the column)"
 
 
+def projected_stat(m: Matrix, e: NDArray[np.float64], tol: float = 1e-8) -> float:
+    """``|orthonormal(m, tol).T @ e|^2`` without forming the n x k basis: the R factor of ``[m | e]``
+    holds ``m = Q R`` and ``Q.T @ e`` in its last column, and ``R``'s SVD has ``m``'s singular values,
+    so the same directions are dropped (the basis is ``Q @ U_R``)."""
+    if m.shape[1] == 0:
+        return 0.0
+    r: Matrix = np.asarray(np.linalg.qr(np.column_stack([m, e]), mode="r"))
+    k = m.shape[1]
+    u, s, _ = np.linalg.svd(r[:k, :k])
+    return float(np.sum((u[:, s > tol * s[0]].T @ r[:k, k]) ** 2))
+
+
 def _surrogates(
     w: Whitened,
     g: str,
@@ -350,14 +383,59 @@ def _surrogates(
     rules: Rules,
     rng: np.random.Generator,
 ) -> tuple[float, float, str]:
+    """Surrogate p-values (unique, marginal) of column cause ``g``.
+
+    Every copy's statistic is ``b^T G^+ b`` with ``G`` its whitened regressors' Gram matrix after
+    the nuisance (and the other groups) and ``b`` their product with the residual, both from one
+    product of the nuisance's and the other groups' bases with a whole batch of copies: a quarter
+    of the passes over those n x k bases that partialling out every copy needs. A copy whose Gram
+    matrix is near singular (a direction below :data:`GRAM_TRUST` of its whole norm squared,
+    where the subtraction loses digits) is scored exactly (:func:`projected_stat`)."""
     column = CAUSES[g].column
     assert column is not None
-    e = w.residual[:, None]
+    e = w.residual
+    others_e = q_others.T @ e  # the residual is orthogonal to the nuisance already
     hits_u = hits_m = 0
     copies, kind = column_copies(w.rs, w.rs.columns[column], rules.column_surrogates, rng)
-    for copy in copies:
-        partialled = w.prepare(surrogate_group(g, copy))
-        hits_m += float(_stat(orthonormal(partialled), e, sigma2)[0]) >= t_m
-        hits_u += float(_stat(orthonormal(partial_out(q_others, partialled)), e, sigma2)[0]) >= t_u
-    k = len(copies)
-    return (1 + hits_u) / (k + 1), (1 + hits_m) / (k + 1), f"{k} surrogate columns ({kind})"
+    # regressors built batch by batch: all copies at once would hold copies x n x width values
+    width = surrogate_group(g, copies[0]).shape[1] if copies else 1
+    per_batch = max(1, SURROGATE_BATCH_VALUES // max(e.size * width, 1))
+    for first in range(0, len(copies), per_batch):
+        batch = [surrogate_group(g, copy) for copy in copies[first : first + per_batch]]
+        widths = [b.shape[1] for b in batch]  # a copy may move within runs where the column does not
+        stacked = np.hstack(batch)
+        del batch
+        x = whiten(w.rs, stacked, w.ar)[w.keep]
+        del stacked
+        # two products rather than one on the bases stacked: stacking copies an n x k matrix
+        on_nuisance, on_others = w.q_nuisance.T @ x, q_others.T @ x
+        x_e = x.T @ e
+        for start, stop in zip(np.cumsum([0, *widths[:-1]]), np.cumsum(widths)):
+            cols = slice(int(start), int(stop))
+            gram = x[:, cols].T @ x[:, cols]
+            scale = float(np.max(np.linalg.eigvalsh(gram))) if gram.size else 0.0
+            p_n, p_o = on_nuisance[:, cols], on_others[:, cols]
+            g_m = gram - p_n.T @ p_n
+            b_m = x_e[cols]
+            g_u = g_m - p_o.T @ p_o
+            b_u = b_m - p_o.T @ others_e
+            stat_m, stat_u = _gram_stat(g_m, b_m, scale), _gram_stat(g_u, b_u, scale)
+            if stat_m is None or stat_u is None:
+                alone = partial_out(w.q_nuisance, x[:, cols])
+                stat_m = projected_stat(alone, e)
+                stat_u = projected_stat(partial_out(q_others, alone), e)
+            hits_m += stat_m / sigma2 >= t_m
+            hits_u += stat_u / sigma2 >= t_u
+    count = len(copies)
+    return (1 + hits_u) / (count + 1), (1 + hits_m) / (count + 1), f"{count} surrogate columns ({kind})"
+
+
+def _gram_stat(gram: Matrix, b: NDArray[np.float64], scale: float) -> float | None:
+    """``b^T gram^-1 b``, or None when an eigenvalue of ``gram`` is below ``GRAM_TRUST x scale``
+    (``scale``: the largest eigenvalue before partialling, so the cancellation is accounted for)."""
+    if gram.size == 0:
+        return 0.0
+    values, vectors = np.linalg.eigh(gram)
+    if scale <= 0.0 or values[0] <= GRAM_TRUST * scale:
+        return None
+    return float(np.sum((vectors.T @ b) ** 2 / values))
