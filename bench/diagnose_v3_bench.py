@@ -124,6 +124,9 @@ def measure(paths: list[Path], draws: str, env: dict[str, str]) -> dict[str, flo
 
 
 def main(argv: list[str]) -> int:
+    if "-h" in argv or "--help" in argv:
+        print(__doc__)
+        return 0
     base_env = {k: v for k, v in os.environ.items() if k not in THREAD_VARIABLES}
     env = dict(base_env)
     blas = _option(argv, "--blas-threads", "")

@@ -101,9 +101,9 @@ def _say(enabled: bool, text: str) -> None:
 
 
 def score(
-    rs: RunSet, levels: int, rules: Rules, seed: int
+    rs: RunSet, levels: int, rules: Rules, seed: int, say: Callable[[str], None] | None = None
 ) -> tuple[Baseline, dict[str, NDArray[np.float64]], dict[str, GroupTest], list[str]]:
-    """Baseline at ``levels`` and every cause's tests."""
+    """Baseline at ``levels`` and every cause's tests; ``say`` gets a progress line between them."""
     nodes, notes = preisach_nodes(rs, levels)
     smooth = node_differences(levels)
     base = fit_baseline(
@@ -119,6 +119,8 @@ def score(
     if rules.class_nuisance:
         base = with_nuisance(rs, base, class_nuisance(rs, base, rules), rules.node_ridge)
     groups = cause_groups(rs, base, rules)
+    if say is not None:
+        say(f"diagnose v3: baseline fitted (output lag {base.lag_s:g} s); testing {len(groups)} causes ...")
     w = whitened(rs, base, rules)
     branch = branch_of(rs)
 
@@ -221,8 +223,10 @@ def diagnose_runs(
     rs = run_set(runs, rules.max_rows, rules.min_samples)
     threads = 1 if rs.y.size < 15_000 else 2
     with threadpool_limits(limits=threads):
-        _say(progress, f"diagnose v3: {rs.n_runs} run(s), {rs.y.size} samples: baseline and tests ...")
-        base, groups, tests, notes = score(rs, rules.preisach_levels, rules, seed)
+        _say(progress, f"diagnose v3: {rs.n_runs} run(s), {rs.y.size} samples: fitting the baseline ...")
+        base, groups, tests, notes = score(
+            rs, rules.preisach_levels, rules, seed, (lambda text: _say(progress, text)) if progress else None
+        )
         ranked, cannot_tell = decide(tests, rules)
         masks, holdout = holdout_folds(rs, rules)
         whitener = ar_whitener(rs.y - base.prediction, rules.max_ar_order)
@@ -232,7 +236,12 @@ def diagnose_runs(
         def richer_tests() -> dict[str, GroupTest]:
             if not richer:
                 _say(progress, "diagnose v3: checking the dynamic causes against a richer baseline ...")
-                richer.update(score(rs, rules.richer_levels, replace(rules, composite_draws=0), seed + 1)[2])
+                # only the dynamic causes' rung is read (:func:`choose`): the column surrogates are skipped
+                richer.update(
+                    score(rs, rules.richer_levels, replace(rules, composite_draws=0, surrogate_screen_p=0.0), seed + 1)[
+                        2
+                    ]
+                )
             return richer
 
         def trial(candidate: str) -> HeldOut:
