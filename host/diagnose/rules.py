@@ -121,7 +121,8 @@ class Rules:
     # S-shaped step response), chosen with it by least squares from this grid (<= the first lag),
     # its tangent in the nuisance; minimum-phase, so dead time stays a cause. Off: on the design set
     # (tuning+fresh, every 3rd, 60 s) it named 5/25 vs 4/25 with 2/14 vs 4/14 false alarms, but
-    # without the held-out gate the false alarms stayed 11/14 (rate 7, delay 3, creep 1): not calibrated
+    # without the held-out gate the false alarms stayed 11/14 (rate 7, delay 3, creep 1): not calibrated;
+    # checked on blind10+11: 5/24 named, 3/16 false alarms vs 6/24, 2/16; ungated 16/16 both (delay 12)
     series_lag: bool = False
     series_lags_s: tuple[float, ...] = (0.01, 0.02, 0.05, 0.1, 0.2, 0.5)
     # AR order bound of the residual's noise model (order by BIC)
