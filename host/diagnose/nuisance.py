@@ -98,6 +98,7 @@ class Baseline:
     prediction: NDArray[np.float64]  # M0's output on every row [units of y]
     lag_s: float
     resonance: tuple[float, float] = (0.0, 0.0)  # (f [Hz], zeta) of the second-order stage; f 0: none
+    second_lag_s: float = 0.0  # a second first-order lag in series with ``lag_s`` [s]; 0: none
 
     @property
     def residual_scale(self) -> float:
@@ -105,8 +106,9 @@ class Baseline:
 
 
 def through_stage(rs: RunSet, base: Baseline, v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``v`` through the baseline's linear dynamics: its output lag, then its second-order stage."""
-    return run_resonance(rs, run_lowpass(rs, v, base.lag_s), *base.resonance)
+    """``v`` through the baseline's linear dynamics: its output lag(s), then its second-order stage."""
+    lagged = run_lowpass(rs, run_lowpass(rs, v, base.lag_s), base.second_lag_s)
+    return run_resonance(rs, lagged, *base.resonance)
 
 
 def fit_baseline(
@@ -118,9 +120,17 @@ def fit_baseline(
     extra_lags_s: tuple[float, ...] = (),
     resonances_hz: tuple[float, ...] = (),
     resonance_zetas: tuple[float, ...] = (),
+    series_lags_s: tuple[float, ...] = (),
 ) -> Baseline:
     """M0 (see module docstring): masses on the nodes, then the output lag by least squares on
-    the lagged hysteresis output, then the masses refitted through that lag (one alternation)."""
+    the lagged hysteresis output, then the masses refitted through that lag (one alternation).
+
+    ``series_lags_s`` (empty: off) adds a second first-order lag in series, chosen with the first
+    from pairs of the two grids (second <= first, 0 = none) by the same least squares: a valve
+    and the mechanics in series give an S-shaped step response that one lag or a sum of parallel
+    lags cannot make and that a dead-time or rate test would otherwise take for its own. Both lags
+    are minimum-phase, so a pure delay stays out of the baseline; the second lag's tangent (a
+    longer second lag) joins the nuisance."""
     y = rs.y
     ones = np.ones((y.size, 1))
     theta = ridge_fit(np.hstack([nodes, ones]), y, smoothness, ridge)
@@ -130,35 +140,46 @@ def fit_baseline(
     # the lag and the second-order stage are chosen together (a lag alone would stand in for a
     # resonance and leave the stage a wrong one)
     stages = [(0.0, 0.0)] + [(f, z) for f in resonances_hz if f < 0.2 / rs.dt for z in resonance_zetas]
-    lagged_by = {tau: run_lowpass(rs, x, tau) for tau in usable}
+    seconds = [0.0] + [tau for tau in series_lags_s if tau >= 0.5 * rs.dt]
+    pairs = [(tau, tau2) for tau in usable for tau2 in seconds if tau2 == 0 or 0 < tau2 <= tau]
 
-    def stage_error(choice: tuple[float, tuple[float, float]]) -> float:
+    def stage_error(choice: tuple[tuple[float, float], tuple[float, float]]) -> float:
         z = np.column_stack([run_resonance(rs, lagged_by[choice[0]], *choice[1]), ones])
         coef = np.linalg.lstsq(z, y, rcond=None)[0]
         return float(np.sum((z @ coef - y) ** 2))
 
-    lag, resonance = min(((tau, fz) for tau in usable for fz in stages), key=stage_error)
+    def stage(v: NDArray[np.float64], tau: float, fz: tuple[float, float], tau2: float) -> NDArray[np.float64]:
+        return run_resonance(rs, run_lowpass(rs, run_lowpass(rs, v, tau), tau2), *fz)
 
-    def stage(v: NDArray[np.float64], tau: float = lag, fz: tuple[float, float] = resonance) -> NDArray[np.float64]:
-        return run_resonance(rs, run_lowpass(rs, v, tau), *fz)
+    # two lags in series are chosen on a static fit's output that lags the wrong way: one more
+    # alternation (choose on the masses refitted through the first choice) finds the pair
+    for _ in range(2 if series_lags_s else 1):
+        lagged_by = {pair: run_lowpass(rs, run_lowpass(rs, x, pair[0]), pair[1]) for pair in pairs}
+        (lag, second), resonance = min(((pair, fz) for pair in pairs for fz in stages), key=stage_error)
+        lagged_nodes = stage(nodes, lag, resonance, second)
+        theta = ridge_fit(np.hstack([lagged_nodes, ones]), y, smoothness, ridge)
+        x = nodes @ theta[:-1]
 
-    lagged_nodes = stage(nodes)
-    theta = ridge_fit(np.hstack([lagged_nodes, ones]), y, smoothness, ridge)
-    x = nodes @ theta[:-1]
     xc = (x - x.mean()) / (np.std(x) or 1.0)
-    lagged_x = stage(x)
+    lagged_x = stage(x, lag, resonance, second)
     columns = [
-        stage(x, 1.5 * lag + rs.dt) - lagged_x,  # a longer output lag
-        stage(run_gradient(rs, x)) * rs.dt,  # an input lead (snubber on the reading)
-        stage(xc**2),  # the static output map
-        stage(xc**3),
-    ] + [stage(x, tau) - lagged_x for tau in extra_lags_s if tau != lag]
+        stage(x, 1.5 * lag + rs.dt, resonance, second) - lagged_x,  # a longer output lag
+        stage(run_gradient(rs, x), lag, resonance, second) * rs.dt,  # an input lead (snubber on the reading)
+        stage(xc**2, lag, resonance, second),  # the static output map
+        stage(xc**3, lag, resonance, second),
+    ] + [stage(x, tau, resonance, second) - lagged_x for tau in extra_lags_s if tau != lag]
     if resonance[0] > 0:  # the stage's own tangents: a stiffer or softer payload, more or less damping
         f, z = resonance
-        columns += [stage(x, lag, (1.25 * f, z)) - lagged_x, stage(x, lag, (f, z + 0.15)) - lagged_x]
+        columns += [
+            stage(x, lag, (1.25 * f, z), second) - lagged_x,
+            stage(x, lag, (f, z + 0.15), second) - lagged_x,
+        ]
+    if series_lags_s:  # the second lag's tangent (a longer one; from none: the shortest of its grid)
+        longer = 1.5 * second + rs.dt if second > 0 else min(seconds[1:], default=rs.dt)
+        columns.append(stage(x, lag, resonance, longer) - lagged_x)
     nuisance = np.hstack([lagged_nodes, np.column_stack(columns), ones])
     coef = ridge_fit(nuisance, y, smoothness, ridge)
-    return Baseline(nuisance, smoothness, x, nuisance @ coef, lag, resonance)
+    return Baseline(nuisance, smoothness, x, nuisance @ coef, lag, resonance, second)
 
 
 def with_nuisance(rs: RunSet, base: Baseline, extra: NDArray[np.float64], ridge: float) -> Baseline:
@@ -166,7 +187,7 @@ def with_nuisance(rs: RunSet, base: Baseline, extra: NDArray[np.float64], ridge:
     refitted (the hysteresis output ``x`` and the lag stay those of the Preisach fit)."""
     nuisance = np.hstack([base.nuisance[:, :-1], extra, base.nuisance[:, -1:]])
     coef = ridge_fit(nuisance, rs.y, base.smoothness, ridge)
-    return Baseline(nuisance, base.smoothness, base.x, nuisance @ coef, base.lag_s, base.resonance)
+    return Baseline(nuisance, base.smoothness, base.x, nuisance @ coef, base.lag_s, base.resonance, base.second_lag_s)
 
 
 def ar_whitener(residual: NDArray[np.float64], max_order: int) -> NDArray[np.float64]:
