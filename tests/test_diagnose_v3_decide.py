@@ -129,3 +129,12 @@ def test_the_campaign_set_injects_each_effect_at_its_size_into_separate_runs():
             assert 0.02 <= truth["effect_size_over_span"] <= 0.12
         loads = [np.ptp(m.extras["load"]) for m in runs]
         assert max(loads) < 0.05  # one hanging mass per run (sensor noise only)
+
+
+def test_the_series_lag_switch_reaches_the_live_baseline():
+    from host.diagnose.v3 import score
+
+    rs = run_set(_runs(6, 200), RULES.max_rows, RULES.min_samples)
+    plain = score(rs, 8, RULES, 0)[0]
+    series = score(rs, 8, dataclasses.replace(RULES, series_lag=True), 0)[0]
+    assert series.nuisance.shape[1] == plain.nuisance.shape[1] + 1  # the second lag's tangent

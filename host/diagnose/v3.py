@@ -115,6 +115,7 @@ def score(
         rules.nuisance_lags_s,
         rules.resonance_hz if rules.resonance_nuisance else (),
         rules.resonance_zetas,
+        series_lags_s=rules.series_lags_s if rules.series_lag else (),
     )
     if rules.class_nuisance:
         base = with_nuisance(rs, base, class_nuisance(rs, base, rules), rules.node_ridge)
