@@ -31,7 +31,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -51,6 +51,7 @@ from bench.plants.real_records import (
 from host.data import Measurement
 
 Array = NDArray[np.float64]
+E = TypeVar("E")  # an effect: one array, or a list of arrays (one per run)
 FORMS: dict[str, tuple[str, ...]] = {
     "none": ("as_measured",),
     "creep": ("kelvin_y", "kelvin_u"),
@@ -217,8 +218,8 @@ def _rms(x: Array) -> float:
     return float(np.sqrt(np.mean(x * x)))
 
 
-def _solve(effect: Callable[[float], Array], size: Callable[[Array], float], target: float, linear: bool) -> float:
-    """The intensity whose effect has RMS ``target`` on the final grid."""
+def _solve(effect: Callable[[float], E], size: Callable[[E], float], target: float, linear: bool) -> float:
+    """The intensity whose effect (an array, or one array per run) has size ``target`` (RMS on the final grid)."""
     if linear:
         return target / max(size(effect(1.0)), 1e-300)
     lo, hi = 1e-6, 5.0  # [s]: a delay or a largest lag time constant

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from bench.plants.injected_real import _lag, lowpass, temperature_column
+from bench.plants.injected_real import _lag, _solve, lowpass, temperature_column
 from bench.plants.real_records import noise_estimate, resolution
 from host.data import Measurement
 
@@ -156,18 +156,6 @@ def _rms(parts: list[Array]) -> float:
     return float(np.sqrt(np.mean(x * x)))
 
 
-def _solve(make: Callable[[float], list[Array]], target: float, linear: bool) -> float:
-    if linear:
-        return target / max(_rms(make(1.0)), 1e-300)
-    lo, hi = 1e-6, 5.0  # [s]: a delay or a largest lag time constant
-    for _ in range(50):
-        mid = float(np.sqrt(lo * hi))
-        lo, hi = (mid, hi) if _rms(make(mid)) < target else (lo, mid)
-        if hi / lo < 1.005:
-            break
-    return float(np.sqrt(lo * hi))
-
-
 def injected_runs(case: RunsCase, data_root: Path) -> tuple[list[Measurement], dict[str, Any]]:
     """The runs of ``case`` (each t from 0 [s], u [bar], y [mm], ``load`` [kg], ``temperature``
     [degC]) and its truth (effect, form, parameters, size over span and noise, files)."""
@@ -195,7 +183,7 @@ def injected_runs(case: RunsCase, data_root: Path) -> tuple[list[Measurement], d
     parameters: dict[str, Any] = {}
     if case.effect != "none":
         make, parameters = _unit_effects(case, runs, cols, rng)
-        intensity = _solve(make, target, case.form not in ("rate_lag", "shift"))
+        intensity = _solve(make, _rms, target, case.form not in ("rate_lag", "shift"))
         effects = make(intensity)
         parameters["intensity"] = intensity
     noise_rng = np.random.default_rng(case.seed + 50_000)  # column sensor noise
