@@ -148,8 +148,12 @@ class Rules:
     marginal_candidates: bool = False
     # a measured column whose unique test passes (against surrogate copies of the same column) is
     # tried before every dynamic cause and drift: the surrogates calibrate it against any structural
-    # misfit, which the dynamic groups' noise null does not. (Its marginal test is not enough: on a
-    # campaign with a real drift, a wandering decoy column beat its surrogates on 5 of 10 records.)
+    # misfit, which the dynamic groups' noise null does not; a column passing only beyond the
+    # baseline alone (marginal) joins them when drift adds nothing beyond the causes (a marginal pass
+    # alone named a wandering decoy on a drifting campaign 5 of 10 times). Off: it names 16/30 vs
+    # 14/30 on the campaigns of runs and 7/24 vs 6/24 on blind10+11, but slow decoy temperatures 5/80
+    # and 4/80 vs 1/80 and 1/80 (bench/diagnose_decoy.py): a decoy passing its own unique test was
+    # only ranked behind a real effect, not rejected
     column_first: bool = False
     # a cause passing its unique test is named only when held-out data confirm it (Clark-West p <= alpha)
     heldout_gate: bool = True

@@ -147,7 +147,8 @@ def decide(tests: dict[str, GroupTest], rules: Rules = RULES) -> tuple[list[str]
     statistic per degree of freedom first): groups overlap, so a real effect's unique part can
     vanish into a rival's directions, and the held-out confirmation then tells which one
     predicts. Without it, when no unique test passes, the one cause significant beyond the
-    baseline alone; else those significant only jointly (cannot tell)."""
+    baseline alone; else those significant only jointly (cannot tell). With
+    ``rules.column_first`` the measured columns come first (see the field's comment)."""
     unique = [g for g, t in tests.items() if t.unique_p <= t.level]
     ranked = sorted(unique, key=lambda g: (g == "slow_drift", -tests[g].unique_share))
     if rules.column_first:
@@ -230,7 +231,7 @@ def diagnose_runs(
         )
         ranked, cannot_tell = decide(tests, rules)
         masks, holdout = holdout_folds(rs, rules)
-        whitener = ar_whitener(rs.y - base.prediction, rules.max_ar_order)
+        whitener = ar_whitener(rs.y - base.prediction, rules.max_ar_order) if rules.heldout_whitened else None
         richer: dict[str, GroupTest] = {}
         trials: dict[str, HeldOut] = {}
 
@@ -238,11 +239,8 @@ def diagnose_runs(
             if not richer:
                 _say(progress, "diagnose v3: checking the dynamic causes against a richer baseline ...")
                 # only the dynamic causes' rung is read (:func:`choose`): the column surrogates are skipped
-                richer.update(
-                    score(rs, rules.richer_levels, replace(rules, composite_draws=0, surrogate_screen_p=0.0), seed + 1)[
-                        2
-                    ]
-                )
+                cheaper = replace(rules, composite_draws=0, surrogate_screen_p=0.0)
+                richer.update(score(rs, rules.richer_levels, cheaper, seed + 1)[2])
             return richer
 
         def trial(candidate: str) -> HeldOut:
@@ -258,7 +256,7 @@ def diagnose_runs(
                 np.random.default_rng(seed),
                 rs.columns.get(column) if column else None,
                 cluster_labels(rs, rules),
-                whitener if rules.heldout_whitened else None,
+                whitener,
             )
             return trials[candidate]
 
