@@ -1,6 +1,7 @@
 """Scorecard of ``pmactl diagnose`` on REAL records with one known effect injected (held out).
 
 Usage: python bench/diagnose_injected.py [--data ../shared/data] [--only TEXT] [--json OUT] [--dry-run]
+       [--method v2|v3]
 
 The records come from :mod:`bench.plants.injected_real`: ten real base records (five piezo runs,
 five joined pneumatic-muscle campaigns) from ``../shared/data``, each as measured and with each
@@ -25,6 +26,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from bench.plants.injected_real import InjectedCase, injected_cases, injected_measurement  # noqa: E402
+from host.data import Measurement  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 
@@ -49,8 +51,35 @@ def dry_run(cases: list[InjectedCase], data: Path) -> list[dict[str, Any]]:
     return rows
 
 
-def score(cases: list[InjectedCase], data: Path) -> list[dict[str, Any]]:
-    """Diagnose every record; one printed line per record."""
+def diagnosed_v3(m: Measurement) -> dict[str, Any]:
+    """One v3 diagnosis of ``m`` in the scorecard's row format (warnings silenced)."""
+    import warnings
+
+    from host.diagnose.v3 import diagnose_runs
+
+    start = time.process_time()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d = diagnose_runs([m])
+    if d.cause != "none":
+        decided = "unique test + held out"
+    elif d.rejected:
+        decided = f"rejected held out or by the ladder: {', '.join(d.rejected)}"
+    else:
+        decided = "cannot tell" if d.cannot_tell else "no unique test passed"
+    return {
+        "verdict": d.cause,
+        "gain": d.gain,
+        "confidence": {},
+        "decided_by": f"v3: {decided}",
+        "cpu_s": time.process_time() - start,
+        "samples": len(m),
+    }
+
+
+def score(cases: list[InjectedCase], data: Path, method: str = "v2") -> list[dict[str, Any]]:
+    """Diagnose every record with ``method`` (v2: ``diagnose``; v3: ``diagnose_runs``); one printed
+    line per record."""
     from bench.diagnose_scorecard import diagnosed, line  # only when scoring: --dry-run never runs the method
 
     rows = []
@@ -62,7 +91,7 @@ def score(cases: list[InjectedCase], data: Path) -> list[dict[str, Any]]:
             "base": case.base,
             "effect": case.effect,
             "form": case.form,
-            **diagnosed(m),
+            **(diagnosed_v3(m) if method == "v3" else diagnosed(m)),
             "size_over_noise": truth["effect_size_over_noise"],
             "size_over_span": truth["effect_size_over_span"],
         }
@@ -101,6 +130,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--only", help="only cases whose name contains this text")
     parser.add_argument("--json", type=Path, help="write every row here")
     parser.add_argument("--dry-run", action="store_true", help="build the records and print their sizes only")
+    parser.add_argument(
+        "--method", choices=("v2", "v3"), default="v2", help="v2 (default: diagnose) or v3 (diagnose_runs)"
+    )
     args = parser.parse_args(argv)
     if not args.data.is_dir():
         print(f"no real data at {args.data}; pass --data DIR (the folder with piezo_dspace/)", file=sys.stderr)
@@ -109,7 +141,7 @@ def main(argv: list[str] | None = None) -> int:
     if not cases:
         print(f"no records under {args.data} match --only {args.only!r}", file=sys.stderr)
         return 2
-    rows = dry_run(cases, args.data) if args.dry_run else score(cases, args.data)
+    rows = dry_run(cases, args.data) if args.dry_run else score(cases, args.data, args.method)
     if not args.dry_run:
         table(rows)
     if args.json:
