@@ -44,8 +44,9 @@ def run_rms(config: Path, bundle: Path | None, capsys: pytest.CaptureFixture[str
     ("protocol", "fit_options", "url"),
     [
         ("triangles", [], "sim://rig?clock=lockstep"),
-        ("forc", ["--preisach-method", "forc"], "sim://rig?clock=lockstep"),
-        ("triangles", [], "sim://rig?clock=lockstep&effect=creep&seed=4"),
+        # 11-13 s each: the FORC fit and the creeping rig run with -m slow (the default run's budget)
+        pytest.param("forc", ["--preisach-method", "forc"], "sim://rig?clock=lockstep", marks=pytest.mark.slow),
+        pytest.param("triangles", [], "sim://rig?clock=lockstep&effect=creep&seed=4", marks=pytest.mark.slow),
     ],
 )
 def test_record_fit_run_feedforward_beats_pid(
