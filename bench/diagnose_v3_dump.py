@@ -43,11 +43,18 @@ from host.diagnose.conditional import (  # noqa: E402
     stationary_draws,
     whitened,
 )
-from host.diagnose.heldout import HeldOut, cluster_labels, held_out, held_out_statistics, holdout_folds
+from host.diagnose.heldout import (  # noqa: E402
+    HeldOut,
+    cluster_labels,
+    held_out,
+    held_out_statistics,
+    holdout_folds,
+    scoring_name,
+)
 from host.diagnose.nuisance import ar_whitener  # noqa: E402
 from host.diagnose.rules import CAUSES, RULES, Rules  # noqa: E402
 from host.diagnose.runs import run_set  # noqa: E402
-from host.diagnose.v3 import choose, decide, score  # noqa: E402
+from host.diagnose.v3 import choose, decide, richer_rung, score  # noqa: E402
 
 
 def overridden(text: str, rules: Rules = RULES) -> Rules:
@@ -100,7 +107,7 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
     """Every input of a v3 decision on one record (see module docstring)."""
     rs = run_set([m], rules.max_rows, rules.min_samples)
     base, groups, tests, _ = score(rs, rules.preisach_levels, rules, seed)
-    richer = score(rs, rules.richer_levels, replace(rules, composite_draws=0), seed + 1)[2]
+    richer = richer_rung(rs, rules, seed)
     masks, _ = holdout_folds(rs, rules)
     # every held-out fit once, scored four ways (per row or cluster-robust, raw or whitened errors):
     # bench/diagnose_replay.py --v3 picks the scoring the rules ask for
@@ -132,9 +139,7 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
                     ar if white else None,
                 )
                 variant = replace(h, clark_west_t=t, clark_west_p=float(norm.sf(t)), interval=interval)
-                variants.setdefault(f"{'clusters' if clustered else 'rows'}/{'white' if white else 'raw'}", {})[g] = (
-                    variant
-                )
+                variants.setdefault(scoring_name(clustered, white), {})[g] = variant
                 if clustered == rules.heldout_clusters and white == rules.heldout_whitened:
                     trials[g] = variant
     ranked, cannot_tell = decide(tests, rules)

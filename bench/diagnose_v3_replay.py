@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from host.diagnose.conditional import GroupTest
-from host.diagnose.heldout import HeldOut
+from host.diagnose.heldout import HeldOut, scoring_name
 from host.diagnose.rules import CAUSES, Rules
 from host.diagnose.v3 import choose, decide
 
@@ -69,9 +69,9 @@ def _richer(row: Line, tests: dict[str, GroupTest]) -> dict[str, GroupTest]:
 
 def _trials(row: Line, rules: Rules) -> dict[str, Any]:
     """The dumped held-out scores the rules ask for (per row, or cluster-robust when dumped both ways)."""
-    scoring = f"{'clusters' if rules.heldout_clusters else 'rows'}/{'white' if rules.heldout_whitened else 'raw'}"
+    scoring = scoring_name(rules.heldout_clusters, rules.heldout_whitened)
     by = row.get("trials_by_scoring", {})
-    if scoring not in by and scoring != "rows/raw":
+    if scoring not in by and scoring != scoring_name(False, False):
         raise SystemExit(f"this dump has no held-out scoring {scoring}: dump it again with bench/diagnose_v3_dump.py")
     return dict(by.get(scoring, row["trials"]))
 

@@ -57,6 +57,12 @@ def cluster_labels(rs: RunSet, rules: Rules) -> NDArray[np.int64] | None:
     return np.minimum(np.arange(n) * 20 // max(n, 1), 19).astype(np.int64)
 
 
+def scoring_name(clustered: bool, whitened: bool) -> str:
+    """The name of one held-out scoring (``clusters`` or ``rows``, ``white`` or ``raw``), as the
+    dumps of ``bench/diagnose_v3_dump.py`` key their trials."""
+    return f"{'clusters' if clustered else 'rows'}/{'white' if whitened else 'raw'}"
+
+
 @dataclass
 class HeldOut:
     base_rmse: float  # [units of y]

@@ -140,6 +140,14 @@ def score(
     return base, groups, tests, notes
 
 
+def richer_rung(rs: RunSet, rules: Rules, seed: int) -> dict[str, GroupTest]:
+    """Every cause's tests with the richer rate-independent baseline (``rules.richer_levels``): the
+    robustness ladder's rung. Only the dynamic causes' tests are read (:func:`choose`), so the
+    composite null and the column surrogates are skipped."""
+    cheaper = replace(rules, composite_draws=0, surrogate_screen_p=0.0)
+    return score(rs, rules.richer_levels, cheaper, seed + 1)[2]
+
+
 def decide(tests: dict[str, GroupTest], rules: Rules = RULES) -> tuple[list[str], list[str]]:
     """(candidates, cannot_tell): the causes whose unique test passes at their level, the largest
     unique share first (a physical cause before ``slow_drift``); with ``rules.marginal_candidates``
@@ -238,9 +246,7 @@ def diagnose_runs(
         def richer_tests() -> dict[str, GroupTest]:
             if not richer:
                 _say(progress, "diagnose v3: checking the dynamic causes against a richer baseline ...")
-                # only the dynamic causes' rung is read (:func:`choose`): the column surrogates are skipped
-                cheaper = replace(rules, composite_draws=0, surrogate_screen_p=0.0)
-                richer.update(score(rs, rules.richer_levels, cheaper, seed + 1)[2])
+                richer.update(richer_rung(rs, rules, seed))
             return richer
 
         def trial(candidate: str) -> HeldOut:
