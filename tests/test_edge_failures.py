@@ -188,14 +188,21 @@ def test_a_full_disk_mid_run_is_a_logged_fault_with_the_valve_vented_and_the_sum
     edge = runtime(bundle, CONST, telemetry_path=tmp_path / "t.pmt")
     rig = edge.rig.device.rig
 
+    replaced = []
+
     def disk_fills(t: float) -> None:
         if abs(t - 1.0) < 5e-4:
+            # swap, never close here: the writer thread may be inside a write to the old handle
             writer = edge.telemetry
-            writer._file.close()
+            replaced.append(writer._file)
             writer._file = open("/dev/full", "wb")  # noqa: SIM115
 
     edge.on_tick.append(disk_fills)
-    summary = edge.run(10.0).as_dict()
+    try:
+        summary = edge.run(10.0).as_dict()
+    finally:
+        for handle in replaced:
+            handle.close()
     assert len(summary["faults"]) == 1 and "No space left on device" in summary["faults"][0]
     assert summary["ticks"] < 10_000 and summary["rms_error"] is not None  # ended early, summary intact
     assert rig.dac.output_volts == 0.0 and not rig.gpio.get("valve_enable")
