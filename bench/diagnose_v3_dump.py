@@ -9,7 +9,9 @@ line: per cause the unique and marginal statistic, df, level and p under each nu
 the richer rung's unique statistic and p (the robustness ladder); the held-out comparison of
 *every* cause (Clark-West p, the gain and its 90 % interval), not only the ones the live rules
 reach; the oracle's p (the true noise-free effect waveform as one regressor beyond the baseline,
-whitened, block-bootstrap calibrated; families that simulate their cases); and the live verdict.
+whitened, block-bootstrap calibrated; families that simulate their cases); every measured column's
+held-out gain against its surrogate copies' (:func:`host.diagnose.v3.column_heldout_test`,
+confirmed or not); and the live verdict.
 ``python bench/diagnose_replay.py --v3 OUT.jsonl`` then decides every record again under any
 :class:`host.diagnose.rules.Rules` overrides, without refitting. A change to the nuisance, the
 groups or a null needs a new dump (pass the same ``--rules`` here).
@@ -54,7 +56,7 @@ from host.diagnose.heldout import (  # noqa: E402
 from host.diagnose.nuisance import ar_whitener  # noqa: E402
 from host.diagnose.rules import CAUSES, RULES, Rules  # noqa: E402
 from host.diagnose.runs import run_set  # noqa: E402
-from host.diagnose.v3 import choose, decide, richer_rung, score  # noqa: E402
+from host.diagnose.v3 import choose, column_heldout_test, confirmed, decide, richer_rung, score, with_columns  # noqa: E402
 
 
 def overridden(text: str, rules: Rules = RULES) -> Rules:
@@ -142,8 +144,16 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
                 variants.setdefault(scoring_name(clustered, white), {})[g] = variant
                 if clustered == rules.heldout_clusters and white == rules.heldout_whitened:
                     trials[g] = variant
+    # every column's held-out surrogate test, confirmed or not: the replay applies the gates
+    surrogates = {g: column_heldout_test(rs, base, groups, g, masks, rules, seed) for g in groups if CAUSES[g].column}
+    passers = sorted(
+        (g for g, r in surrogates.items() if r.p <= tests[g].level and confirmed(trials[g], rules)),
+        key=lambda g: -surrogates[g].gain,
+    )
     ranked, cannot_tell = decide(tests, rules)
     choice = choose(ranked, tests, lambda: richer, trials.__getitem__, rules)
+    if rules.column_heldout_surrogates:
+        choice = with_columns(choice, passers, trials.__getitem__)
     oracle = None
     if wave is not None:
         w = whitened(rs, base, rules)
@@ -157,6 +167,7 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
         "trials": {g: _trial_json(h) for g, h in trials.items()},
         "trials_by_scoring": {k: {g: _trial_json(h) for g, h in v.items()} for k, v in variants.items()},
         "oracle_p": oracle,
+        "heldout_surrogates": {g: r.as_json() for g, r in surrogates.items()},
         "baseline_columns": int(base.nuisance.shape[1]),
     }
 

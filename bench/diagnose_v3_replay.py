@@ -20,7 +20,7 @@ import numpy as np
 from host.diagnose.conditional import GroupTest
 from host.diagnose.heldout import HeldOut, scoring_name
 from host.diagnose.rules import CAUSES, Rules
-from host.diagnose.v3 import choose, decide
+from host.diagnose.v3 import choose, confirmed, decide, with_columns
 
 Line = dict[str, Any]
 _EMPTY = np.zeros(0)
@@ -81,6 +81,17 @@ def _trial(row: Line, g: str, rules: Rules) -> HeldOut:
     return HeldOut(0.0, 0.0, h["gain"], 0.0, (h["lo"], h["hi"]), 0.0, h["cw_p"], [], _EMPTY, _EMPTY)
 
 
+def _column_passers(row: Line, tests: dict[str, GroupTest], rules: Rules) -> list[str]:
+    """:func:`host.diagnose.v3.column_passers` from the dump (every column's held-out surrogate result)."""
+    if not rules.column_heldout_surrogates:
+        return []
+    found = row.get("heldout_surrogates")
+    if found is None:
+        raise SystemExit("this dump has no held-out surrogate results: dump it again with bench/diagnose_v3_dump.py")
+    passed = [g for g, r in found.items() if r["p"] <= tests[g].level and confirmed(_trial(row, g, rules), rules)]
+    return sorted(passed, key=lambda g: -found[g]["gain"])
+
+
 @dataclass
 class Replayed:
     verdict: str
@@ -93,6 +104,7 @@ def replay(row: Line, rules: Rules) -> Replayed:
     tests = _tests(row, rules)
     ranked, _ = decide(tests, rules)
     choice = choose(ranked, tests, lambda: _richer(row, tests), lambda g: _trial(row, g, rules), rules)
+    choice = with_columns(choice, _column_passers(row, tests, rules), lambda g: _trial(row, g, rules))
     effect = row["effect"]
     truth = tests.get(effect)
     passed = truth is not None and truth.unique_p <= truth.level

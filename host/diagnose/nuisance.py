@@ -78,14 +78,22 @@ def ridge_fit(
     of ``strength`` on the last ``tail_cols`` (a cause's group: collinear with the nuisance's
     lags, it must not cancel them in training and fail held out)."""
     gram = design.T @ design
+    return np.asarray(np.linalg.solve(gram + ridge_penalty(gram, smoothness, strength, tail_cols), design.T @ y))
+
+
+def ridge_penalty(
+    gram: NDArray[np.float64], smoothness: NDArray[np.float64], strength: float, tail_cols: int = 0
+) -> NDArray[np.float64]:
+    """The penalty :func:`ridge_fit` adds to ``gram`` (the design's X^T X): see there; for fits
+    assembled from Gram blocks (:mod:`host.diagnose.heldout_surrogates`)."""
     diag = np.diag(gram)
     k = smoothness.shape[0]
-    penalty = np.diag(np.full(design.shape[1], 1e-10 * (float(diag.mean()) or 1.0)))
+    penalty = np.diag(np.full(gram.shape[0], 1e-10 * (float(diag.mean()) or 1.0)))
     if k:
         penalty[:k, :k] += strength * (float(diag[:k].mean()) or 1.0) * (smoothness + 1e-4 * np.eye(k))
     if tail_cols:
         penalty[-tail_cols:, -tail_cols:] += strength * (float(diag[-tail_cols:].mean()) or 1.0) * np.eye(tail_cols)
-    return np.asarray(np.linalg.solve(gram + penalty, design.T @ y))
+    return penalty
 
 
 @dataclass

@@ -155,6 +155,13 @@ class Rules:
     # and 4/80 vs 1/80 and 1/80 (bench/diagnose_decoy.py): a decoy passing its own unique test was
     # only ranked behind a real effect, not rejected
     column_first: bool = False
+    # a measured column confirmed held out whose held-out gain beyond the baseline and the drift
+    # splines beats its surrogate copies' (p at the column's level, host/diagnose/heldout_surrogates.py)
+    # is named when it predicts held-out data better than the cause the rules chose, whatever its
+    # in-sample tests. Off: campaigns of runs 16/30 vs 14/30, but slow decoys 2/80 and 3/80 vs 1/80
+    # and 1/80, tuning+fresh 4/25 with 6/14 false alarms vs 4/14, blind10+11 unchanged (6/24, 2/16):
+    # copies of a slow series are not exchangeable with one that trends (docs/methods/diagnosis.md)
+    column_heldout_surrogates: bool = False
     # a cause passing its unique test is named only when held-out data confirm it (Clark-West p <= alpha)
     heldout_gate: bool = True
     # the held-out confirmation also needs the gain's 90 % interval above 0 (beside Clark-West p <= alpha)

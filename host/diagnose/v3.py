@@ -29,9 +29,10 @@ from threadpoolctl import threadpool_limits
 
 from host.data import Measurement
 from host.diagnose.composite import class_nuisance, null_classes, simulated_records, unrestricted_residual
-from host.diagnose.conditional import GroupTest, group_tests, whitened
+from host.diagnose.conditional import GroupTest, column_copies, group_tests, whitened
 from host.diagnose.groups import branch_of, cause_groups, column_group
 from host.diagnose.heldout import HeldOut, cluster_labels, held_out, holdout_folds
+from host.diagnose.heldout_surrogates import HeldOutSurrogates, held_out_surrogates
 from host.diagnose.nuisance import Baseline, ar_whitener, fit_baseline, with_nuisance
 from host.diagnose.rules import CAUSES, RULES, Rules
 from host.diagnose.runs import RunSet, node_differences, preisach_nodes, run_set
@@ -59,6 +60,8 @@ class DiagnosisV3:
     seconds: float = 0.0
     cpu_seconds: float = 0.0
     trials: dict[str, HeldOut] = field(default_factory=dict)  # every held-out comparison made, in order
+    # measured columns confirmed held out, against their copies' held-out gains (rules.column_heldout_surrogates)
+    column_heldout: dict[str, HeldOutSurrogates] = field(default_factory=dict)
 
     @property
     def gain(self) -> float:
@@ -88,6 +91,7 @@ class DiagnosisV3:
                 "output_lag_s": round(self.baseline.lag_s, 6),
                 "nuisance_columns": self.baseline.nuisance.shape[1],
             },
+            "heldout_surrogates": {g: r.as_json() for g, r in self.column_heldout.items()},
             "runs": self.runset.names,
             "samples": int(self.runset.y.size),
             "rules": self.rules.as_json(),
@@ -214,15 +218,87 @@ def choose(
                 class_mismatch = class_mismatch or not rejected
                 rejected.append(candidate)
                 continue
-        h = trial(candidate)
-        # nested confirmation: the extension must predict rows it was not fitted on
-        confirmed = h.clark_west_p <= rules.alpha and (h.interval[0] > 0.0 or not rules.heldout_interval_gate)
-        if confirmed or not rules.heldout_gate:
+        if confirmed(trial(candidate), rules) or not rules.heldout_gate:
             return Choice(candidate, rejected, False, False, candidate)
         if not rejected:
             heldout_of, not_confirmed = candidate, True
         rejected.append(candidate)
     return Choice(cause, rejected, class_mismatch, not_confirmed, heldout_of)
+
+
+def with_columns(choice: Choice, passers: list[str], trial: Callable[[str], HeldOut]) -> Choice:
+    """``choice``, or the first of ``passers`` (columns that beat their copies held out,
+    :func:`column_passers`) when it predicts held-out data better than the chosen cause (or none
+    was chosen): of two confirmed causes, the one that predicts best is named, the other is
+    ``also``."""
+    if not passers:
+        return choice
+    column = passers[0]
+    if choice.cause != "none" and trial(column).gain <= trial(choice.cause).gain:
+        return choice
+    return Choice(column, [g for g in choice.rejected if g != column], False, False, column)
+
+
+def confirmed(h: HeldOut, rules: Rules) -> bool:
+    """Nested confirmation: the extension predicts rows it was not fitted on (Clark-West p <= alpha,
+    and with ``rules.heldout_interval_gate`` the gain's 90 % interval above 0)."""
+    return h.clark_west_p <= rules.alpha and (h.interval[0] > 0.0 or not rules.heldout_interval_gate)
+
+
+def column_heldout_test(
+    rs: RunSet,
+    base: Baseline,
+    groups: dict[str, NDArray[np.float64]],
+    cause: str,
+    masks: list[NDArray[np.bool_]],
+    rules: Rules,
+    seed: int,
+) -> HeldOutSurrogates:
+    """The held-out gain of column cause ``cause`` beyond the baseline and drift in time, against
+    that of ``rules.column_surrogates`` copies of its column (:mod:`host.diagnose.heldout_surrogates`):
+    a column that only stands in for a drift gains nothing over the drift terms, nor do its copies."""
+    column = CAUSES[cause].column
+    assert column is not None
+    branch = branch_of(rs)
+    beyond = np.hstack([base.nuisance, groups["slow_drift"]]) if "slow_drift" in groups else base.nuisance
+    copies, kind = column_copies(rs, rs.columns[column], rules.column_surrogates, np.random.default_rng(seed))
+    return held_out_surrogates(
+        rs.y,
+        beyond,
+        base.smoothness,
+        lambda copy: column_group(rs, base, copy, rules, branch),
+        rs.columns[column],
+        copies,
+        kind,
+        masks,
+        rules.node_ridge,
+    )
+
+
+def column_passers(
+    rs: RunSet,
+    base: Baseline,
+    groups: dict[str, NDArray[np.float64]],
+    tests: dict[str, GroupTest],
+    trial: Callable[[str], HeldOut],
+    masks: list[NDArray[np.bool_]],
+    rules: Rules,
+    seed: int,
+    say: Callable[[str], None] = lambda text: None,
+) -> tuple[list[str], dict[str, HeldOutSurrogates]]:
+    """The measured columns confirmed held out whose held-out gain beats their surrogate copies'
+    at the column's level (``rules.column_heldout_surrogates``, :func:`column_heldout_test`), the
+    largest gain first, and every tested column's result."""
+    found: dict[str, HeldOutSurrogates] = {}
+    if not rules.column_heldout_surrogates:
+        return [], found
+    for g in tests:
+        if CAUSES[g].column is None or not confirmed(trial(g), rules):
+            continue
+        say(f"diagnose v3: held-out gain of {g} against {rules.column_surrogates} copies of its column ...")
+        found[g] = column_heldout_test(rs, base, groups, g, masks, rules, seed)
+    passed = sorted((g for g, r in found.items() if r.p <= tests[g].level), key=lambda g: -found[g].gain)
+    return passed, found
 
 
 def diagnose_runs(
@@ -237,7 +313,6 @@ def diagnose_runs(
         base, groups, tests, notes = score(
             rs, rules.preisach_levels, rules, seed, (lambda text: _say(progress, text)) if progress else None
         )
-        ranked, cannot_tell = decide(tests, rules)
         masks, holdout = holdout_folds(rs, rules)
         whitener = ar_whitener(rs.y - base.prediction, rules.max_ar_order) if rules.heldout_whitened else None
         richer: dict[str, GroupTest] = {}
@@ -250,6 +325,8 @@ def diagnose_runs(
             return richer
 
         def trial(candidate: str) -> HeldOut:
+            if candidate in trials:
+                return trials[candidate]
             _say(progress, f"diagnose v3: held-out gain of {candidate} over {len(masks)} folds ...")
             column = CAUSES[candidate].column
             trials[candidate] = held_out(
@@ -266,7 +343,15 @@ def diagnose_runs(
             )
             return trials[candidate]
 
+        ranked, cannot_tell = decide(tests, rules)
         choice = choose(ranked, tests, richer_tests, trial, rules)
+        passers, column_heldout = column_passers(
+            rs, base, groups, tests, trial, masks, rules, seed, lambda text: _say(progress, text)
+        )
+        choice = with_columns(choice, passers, trial)
+        if choice.cause in passers:
+            cannot_tell = []
+            ranked = [choice.cause] + [g for g in ranked if g != choice.cause]
         cause, class_mismatch, not_confirmed, rejected = (
             choice.cause,
             choice.class_mismatch,
@@ -293,6 +378,7 @@ def diagnose_runs(
         not_confirmed=not_confirmed and cause == "none",
         rejected=rejected,
         trials=trials,
+        column_heldout=column_heldout,
     )
     out.reason = explain(out, first)
     out.seconds, out.cpu_seconds = time.perf_counter() - wall, time.process_time() - cpu
@@ -329,6 +415,14 @@ def explain(d: DiagnosisV3, tested: str) -> str:
         also = f"; also significant on its own (not checked held out): {', '.join(d.also)}" if d.also else ""
         if d.rejected:
             also += f"; passed on the record but failed held out or with a richer baseline: {', '.join(d.rejected)}"
+        if d.cause in d.column_heldout:
+            s = d.column_heldout[d.cause]
+            return (
+                f"{d.cause}: the {CAUSES[d.cause].column} column's terms predict held-out data better than those of "
+                f"{s.copies} surrogate copies of it ({s.kind}): a held-out gain of {s.gain:.1%} against a median "
+                f"{s.median_copy_gain:.1%} (p = {s.p:.2g} at level {g.level:.3g}; in-sample unique p = "
+                f"{g.unique_p:.2g}){held}{also}"
+            )
         return (
             f"{d.cause}: its own regressors ({CAUSES[d.cause].meaning}) explain {g.unique_share:.1%} of the whitened "
             f"residual beyond the baseline and every other cause (p = {g.unique_p:.2g} at level {g.level:.3g}, "
