@@ -24,7 +24,7 @@ import json
 import sys
 import time
 import warnings
-from dataclasses import fields, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -54,32 +54,14 @@ from host.diagnose.heldout import (  # noqa: E402
     scoring_name,
 )
 from host.diagnose.nuisance import ar_whitener  # noqa: E402
-from host.diagnose.rules import CAUSES, RULES, Rules  # noqa: E402
+from host.diagnose.rules import CAUSES, RULES, Rules, with_overrides  # noqa: E402
 from host.diagnose.runs import run_set  # noqa: E402
 from host.diagnose.v3 import choose, column_heldout_test, confirmed, decide, richer_rung, score, with_columns  # noqa: E402
 
 
 def overridden(text: str, rules: Rules = RULES) -> Rules:
-    """``rules`` with ``field=value`` overrides (comma-separated; bools as true/false, tuples of
-    numbers slash-separated: ``output_lags_s=0/0.01/0.1``); ValueError naming an unknown field."""
-    known = {f.name: f for f in fields(Rules)}
-    changes: dict[str, Any] = {}
-    for item in filter(None, text.split(",")):
-        key, _, raw = item.partition("=")
-        if key not in known or key in ("extra", "version"):
-            raise ValueError(f"--rules: unknown field {key!r}; use some of {', '.join(sorted(known))}")
-        current = getattr(rules, key)
-        if isinstance(current, bool):
-            changes[key] = raw.lower() in ("1", "true", "yes", "on")
-        elif isinstance(current, int):
-            changes[key] = int(raw)
-        elif isinstance(current, float):
-            changes[key] = float(raw)
-        elif isinstance(current, tuple):
-            changes[key] = tuple(float(v) for v in filter(None, raw.split("/")))
-        else:
-            raise ValueError(f"--rules: {key} is not a number or a flag")
-    return replace(rules, **changes)
+    """``rules`` with ``field=value`` overrides (:func:`host.diagnose.rules.with_overrides`)."""
+    return with_overrides(text, rules)
 
 
 def oracle_p(rs_wave: np.ndarray, w: Any) -> float:

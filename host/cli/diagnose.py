@@ -52,6 +52,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="v2: held-out gain floors (default for one record); v3: calibrated conditional tests (default for "
         "several runs)",
     )
+    diag.add_argument(
+        "--rules",
+        metavar="FIELD=VALUE,...",
+        help="v3: change fields of its rules (host/diagnose/rules.py), e.g. column_first=true or alpha=0.01; "
+        "the verdict's method names them",
+    )
     diag.add_argument("--report", metavar="DIR", help="write report.md and PNG figures here")
     diag.add_argument("--json", metavar="OUT.json", help="write the result as JSON ('-' for stdout)")
     diag.add_argument(
@@ -156,6 +162,7 @@ def run(args: argparse.Namespace) -> int:
                     f"--method v2 identifies on one training recording and --train matches {len(args.train)}; "
                     "drop --method (several training runs are judged together) or name one --train file"
                 )
+            _v3_rules(args)
             return _cross_runs(args)
         if args.report:
             raise DataError(
@@ -164,11 +171,16 @@ def run(args: argparse.Namespace) -> int:
             )
         args.train = args.train[0]
     if args.method == "v3" or len(args.data) > 1:
+        _v3_rules(args)
         if args.stability:
             raise DataError("--stability is a v2 check; v3 reports held-out folds and an interval instead")
         if args.method == "v2":
             raise DataError("method v2 takes one recording; several runs are diagnosed with --method v3 (the default)")
         return _runs_v3(args)
+    if args.rules:
+        raise DataError(
+            "--rules sets the rules of method v3 and this is a v2 diagnosis (one recording); add --method v3"
+        )
     if args.folds is None:
         args.folds = 4
     if args.folds < 2:
@@ -225,6 +237,16 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _v3_rules(args: argparse.Namespace) -> None:
+    """``args.rules`` as a :class:`host.diagnose.rules.Rules` (the default without ``--rules``)."""
+    from host.diagnose.rules import RULES, with_overrides
+
+    try:
+        args.rules = with_overrides(args.rules or "", RULES)
+    except ValueError as exc:
+        raise DataError(str(exc)) from None
+
+
 def _runs_v3(args: argparse.Namespace) -> int:
     """Diagnosis v3 of one or more runs: the verdict, the evidence per cause, the held-out gain."""
     from host.diagnose.v3 import diagnose_runs
@@ -235,7 +257,7 @@ def _runs_v3(args: argparse.Namespace) -> int:
     say = (lambda *a: print(*a, file=sys.stderr)) if to_stdout else print
     runs = _read_runs(args.data, args)
     # a progress line on stderr for anything that takes more than a few seconds (stdout stays clean)
-    result = diagnose_runs(runs, progress=sum(len(m) for m in runs) > 10_000 or len(runs) > 10)
+    result = diagnose_runs(runs, rules=args.rules, progress=sum(len(m) for m in runs) > 10_000 or len(runs) > 10)
     title = Path(args.data[0]).name if len(runs) == 1 else f"{len(runs)} runs ({Path(args.data[0]).name} ...)"
     say(f"{title}: cause {result.cause} (method {result.rules.version})")
     say(f"  {result.reason}")
@@ -286,7 +308,7 @@ def _cross_runs(args: argparse.Namespace) -> int:
     test = _read_runs(args.test, args)
     _same_units(train + test, args.train + args.test)
     units = _output_unit(train + test)
-    result = cross_runs(train, test)
+    result = cross_runs(train, test, rules=args.rules)
     say(f"{_runs_title(args.train)} -> {_runs_title(args.test)}: cause {result.cause}")
     say(f"  {result.reason}")
     say(f"  {'correction':<18} {'gain':>7} {'90 % interval':>17} {'Clark-West p':>13}")

@@ -195,8 +195,8 @@ def write_report_v3(d: DiagnosisV3, directory: str | Path, source: str, units: s
 
 - Data: {rs.n_runs} run(s), {rs.y.size} samples at {1 / rs.dt:.3g} Hz ({rs.clock[-1]:.3g} s in all): {runs}.
 - Held-out data: {d.holdout}.
-- Method {d.rules.version}: calibrated tests, family-wise 5 % false-alarm rate per record; every threshold is in
-  `host/diagnose/rules.py`.
+- Method {d.rules.version}: calibrated tests, family-wise {100 * d.rules.alpha:g} % false-alarm rate per record;
+  every threshold is in `host/diagnose/rules.py`.
 
 ![where the model fails](failure.png)
 {by_run}

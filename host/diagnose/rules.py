@@ -10,7 +10,9 @@ resampling counts), physical ranges (time constants, dead times) or resource bou
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+import math
+from dataclasses import asdict, dataclass, field, fields, replace
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -186,3 +188,53 @@ class Rules:
 
 
 RULES = Rules()
+
+
+_TRUE, _FALSE = ("1", "true", "yes", "on"), ("0", "false", "no", "off")
+
+
+def with_overrides(text: str, rules: Rules = RULES) -> Rules:
+    """``rules`` with ``field=value`` overrides, comma-separated: flags as true/false, numbers as
+    numbers, tuples of numbers slash-separated (``output_lags_s=0/0.01/0.1``). The version becomes
+    ``v3.0+overrides`` so a verdict says which rules made it. Bad input: one ValueError naming the
+    field and what it takes."""
+    known = {f.name for f in fields(Rules)} - {"extra", "version"}
+    changes: dict[str, Any] = {}
+    for item in filter(None, (part.strip() for part in text.split(","))):
+        key, equals, raw = item.partition("=")
+        key, raw = key.strip(), raw.strip()
+        if key not in known:
+            raise ValueError(f"--rules: unknown field {key!r}; use some of {', '.join(sorted(known))}")
+        current = getattr(rules, key)
+        if isinstance(current, bool):
+            kind = "true or false"
+        elif isinstance(current, int):
+            kind = "a whole number"
+        elif isinstance(current, float):
+            kind = "a number"
+        else:
+            kind = "numbers separated by '/'"
+        if not equals or not raw:
+            raise ValueError(f"--rules: {key} needs a value ({key}=...), {kind}")
+        try:
+            if isinstance(current, bool):
+                if raw.lower() not in _TRUE + _FALSE:
+                    raise ValueError(raw)
+                changes[key] = raw.lower() in _TRUE
+            elif isinstance(current, int):
+                changes[key] = int(raw)
+            elif isinstance(current, float):
+                changes[key] = float(raw)
+            else:
+                changes[key] = tuple(float(v) for v in filter(None, raw.split("/")))
+        except ValueError:
+            raise ValueError(f"--rules: {key}={raw} is not {kind}") from None
+        values = changes[key] if isinstance(changes[key], tuple) else (changes[key],)
+        if not all(math.isfinite(v) and v >= 0 for v in values):
+            raise ValueError(f"--rules: {key}={raw}: every field takes finite values of 0 or more")
+    if not 0 < changes.get("alpha", rules.alpha) < 1:
+        raise ValueError(f"--rules: alpha={changes['alpha']} is a false-alarm rate; give one between 0 and 1")
+    if not changes:
+        return rules
+    applied = ",".join(f"{k}={v}" for k, v in changes.items())
+    return replace(rules, **changes, version=f"{rules.version}+{applied}")

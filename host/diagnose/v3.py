@@ -419,7 +419,8 @@ def explain(d: DiagnosisV3, tested: str) -> str:
             s = d.column_heldout[d.cause]
             return (
                 f"{d.cause}: the {CAUSES[d.cause].column} column's terms predict held-out data better than those of "
-                f"{s.copies} surrogate copies of it ({s.kind}): a held-out gain of {s.gain:.1%} against a median "
+                f"{s.copies} surrogate copies of it ({s.kind}): beyond the baseline and the drift terms, a held-out "
+                f"gain of {s.gain:.1%} against a median "
                 f"{s.median_copy_gain:.1%} (p = {s.p:.2g} at level {g.level:.3g}; in-sample unique p = "
                 f"{g.unique_p:.2g}){held}{also}"
             )

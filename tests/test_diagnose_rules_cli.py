@@ -1,0 +1,67 @@
+"""``pmactl diagnose --rules FIELD=VALUE,...``: v3's rules changed from the command line
+(host/diagnose/rules.with_overrides), named in the verdict, bad input one line and exit 2."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from host.cli import main
+from host.diagnose.rules import RULES, with_overrides
+from tests.test_diagnose_v3 import runs_of, write_runs
+
+
+def test_overrides_change_the_fields_and_name_the_version():
+    rules = with_overrides("column_first=true, alpha=0.01,output_lags_s=0/0.05")
+    assert (rules.column_first, rules.alpha, rules.output_lags_s) == (True, 0.01, (0.0, 0.05))
+    assert rules.version == "v3.0+column_first=True,alpha=0.01,output_lags_s=(0.0, 0.05)"
+    assert with_overrides("") is RULES and with_overrides("max_folds=3").max_folds == 3
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("colum_first=true", "unknown field 'colum_first'"),
+        ("version=v9", "unknown field 'version'"),
+        ("column_first=maybe", "column_first=maybe is not true or false"),
+        ("alpha", "alpha needs a value"),
+        ("alpha=x", "alpha=x is not a number"),
+        ("max_folds=2.5", "max_folds=2.5 is not a whole number"),
+        ("output_lags_s=0/a", "not numbers separated by '/'"),
+        ("node_ridge=-1", "finite values of 0 or more"),
+        ("node_ridge=inf", "finite values of 0 or more"),
+        ("alpha=1", "between 0 and 1"),
+    ],
+)
+def test_bad_overrides_say_which_field_and_what_it_takes(text, message):
+    with pytest.raises(ValueError, match=message.replace("(", r"\(")):
+        with_overrides(text)
+
+
+def test_the_cli_runs_v3_with_the_rules_given_and_writes_them_into_the_json(tmp_path, capsys):
+    write_runs(runs_of(5, 12, "load"), tmp_path / "runs")
+    out = tmp_path / "v3.json"
+    code = main(
+        ["diagnose", str(tmp_path / "runs" / "*.csv"), "--rules", "column_heldout_surrogates=true", "--json", str(out)]
+    )
+    assert code == 0
+    payload = json.loads(out.read_text())
+    assert payload["method"] == "v3.0+column_heldout_surrogates=True"
+    assert payload["rules"]["column_heldout_surrogates"] is True
+    assert payload["cause"] == "load_dependence" and payload["heldout_surrogates"]["load_dependence"]["copies"] == 199
+    assert "method v3.0+column_heldout_surrogates=True" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["{a}", "{b}", "--rules", "alpha=2"], "between 0 and 1"),
+        (["{a}", "--rules", "alpha=0.01"], "--rules sets the rules of method v3"),
+    ],
+)
+def test_bad_rules_on_the_command_line_are_one_line_and_exit_2(tmp_path, capsys, args, message):
+    a, b = write_runs(runs_of(8, 2, "none"), tmp_path)
+    code = main(["diagnose", *[arg.format(a=a, b=b) for arg in args]])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and message in err[0]
