@@ -244,6 +244,9 @@ def new_command_cases(root: Path, csv: dict[str, str], readonly: Path) -> list[C
         Case("diagnose binary", ["diagnose", str(root / "binary.csv")]),
         Case("diagnose missing", ["diagnose", str(root / "absent.csv")]),
         Case("diagnose directory", ["diagnose", str(root / "p_dir.csv")]),
+        Case("diagnose --rules unknown field", ["diagnose", csv["good"], csv["good"], "--rules", "alpah=0.1"]),
+        Case("diagnose --rules flag not a flag", ["diagnose", csv["good"], csv["good"], "--rules", "column_first=2"]),
+        Case("diagnose --rules on v2", ["diagnose", csv["good"], "--rules", "alpha=0.01"]),
     ]
     return cases
 
