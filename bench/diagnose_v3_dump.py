@@ -136,6 +136,8 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
     choice = choose(ranked, tests, lambda: richer, trials.__getitem__, rules)
     if rules.column_heldout_surrogates:
         choice = with_columns(choice, passers, trials.__getitem__)
+        if choice.cause in passers:
+            cannot_tell = []  # as diagnose_runs: a named column leaves nothing untold
     oracle = None
     if wave is not None:
         w = whitened(rs, base, rules)

@@ -71,12 +71,42 @@ def test_a_decoy_load_ranks_among_its_copies_as_often_as_chance_says():
     assert np.mean(ps <= 0.01) <= 0.1
 
 
-def test_the_real_columns_fit_is_the_held_out_extension_of_heldout_py():
-    rs, nuisance, load = _campaign(True, 4)
-    group = np.column_stack([load, load * rs.u, load * rs.u**2])
-    h = held_out(rs, nuisance, np.zeros((0, 0)), group, _masks(rs), RULES.node_ridge, np.random.default_rng(0), load)
-    p, gain = _test(rs, nuisance, load)
-    assert gain == pytest.approx(h.gain, abs=1e-9)
+def test_the_gram_block_fit_is_the_held_out_extension_of_heldout_py():
+    """On a real v3 baseline (Preisach nodes with their smoothness penalty, whole-run folds) the
+    column's and a copy's held-out gains equal held_out's, which fits on the training rows."""
+    from host.diagnose.groups import branch_of, column_group
+    from host.diagnose.heldout import holdout_folds
+    from host.diagnose.runs import run_set
+    from host.diagnose.v3 import score
+    from tests.test_diagnose_v3 import runs_of
+
+    rs = run_set(runs_of(5, 12, "load"), RULES.max_rows, RULES.min_samples)
+    base, groups, _, _ = score(rs, RULES.preisach_levels, RULES, 0)
+    masks, _ = holdout_folds(rs, RULES)
+    branch = branch_of(rs)
+    load = rs.columns["load"]
+    copy = column_copies(rs, load, 1, np.random.default_rng(2))[0][0]
+    gains = {}
+    for name, values in (("real", load), ("copy", copy)):
+        group = column_group(rs, base, values, RULES, branch)
+        h = held_out(
+            rs, base.nuisance, base.smoothness, group, masks, RULES.node_ridge, np.random.default_rng(0), values
+        )
+        gains[name] = h.gain
+    r = held_out_surrogates(
+        rs.y,
+        base.nuisance,
+        base.smoothness,
+        lambda c: column_group(rs, base, c, RULES, branch),
+        load,
+        [copy],
+        "one copy",
+        masks,
+        RULES.node_ridge,
+    )
+    assert r.gain == pytest.approx(gains["real"], abs=1e-9)
+    assert r.median_copy_gain == pytest.approx(gains["copy"], abs=1e-9)
+    assert base.smoothness.shape[0] > 0 and "load_dependence" in groups
 
 
 def _trial(gain: float) -> HeldOut:
@@ -115,3 +145,6 @@ def test_with_the_switch_a_load_per_run_is_named_with_its_held_out_surrogate_evi
     assert "surrogate copies" in d.reason
     assert d.as_json()["heldout_surrogates"]["load_dependence"]["copies"] == RULES.column_surrogates
     assert diagnose_runs(runs).column_heldout == {}
+    few = diagnose_runs(runs, rules=replace(RULES, column_heldout_surrogates=True, column_surrogates=19))
+    assert few.cause != "load_dependence" or "surrogate copies" not in few.reason  # p >= 1/20 cannot pass
+    assert any("cannot pass: 19 copies give p >= 0.05" in note for note in few.notes)

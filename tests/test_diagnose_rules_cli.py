@@ -15,7 +15,8 @@ from tests.test_diagnose_v3 import runs_of, write_runs
 def test_overrides_change_the_fields_and_name_the_version():
     rules = with_overrides("column_first=true, alpha=0.01,output_lags_s=0/0.05")
     assert (rules.column_first, rules.alpha, rules.output_lags_s) == (True, 0.01, (0.0, 0.05))
-    assert rules.version == "v3.0+column_first=True,alpha=0.01,output_lags_s=(0.0, 0.05)"
+    assert rules.version == "v3.0+column_first=true,alpha=0.01,output_lags_s=0/0.05"
+    assert with_overrides(rules.version.partition("+")[2]) == rules  # the method string is --rules text
     assert with_overrides("") is RULES and with_overrides("max_folds=3").max_folds == 3
 
 
@@ -29,9 +30,14 @@ def test_overrides_change_the_fields_and_name_the_version():
         ("alpha=x", "alpha=x is not a number"),
         ("max_folds=2.5", "max_folds=2.5 is not a whole number"),
         ("output_lags_s=0/a", "not numbers separated by '/'"),
-        ("node_ridge=-1", "finite values of 0 or more"),
+        ("node_ridge=-1", "node_ridge takes finite values of 0 or more"),
         ("node_ridge=inf", "finite values of 0 or more"),
         ("alpha=1", "between 0 and 1"),
+        ("alpha=0", "above 0 and at most 1"),
+        ("ladder_drop=1.5", "above 0 and at most 1"),
+        ("max_folds=0", "max_folds takes finite values of 2 or more"),
+        ("bootstrap_draws=0", "bootstrap_draws takes finite values of 19 or more"),
+        ("output_lags_s=/", "holds no number"),
     ],
 )
 def test_bad_overrides_say_which_field_and_what_it_takes(text, message):
@@ -47,17 +53,19 @@ def test_the_cli_runs_v3_with_the_rules_given_and_writes_them_into_the_json(tmp_
     )
     assert code == 0
     payload = json.loads(out.read_text())
-    assert payload["method"] == "v3.0+column_heldout_surrogates=True"
+    assert payload["method"] == "v3.0+column_heldout_surrogates=true"
     assert payload["rules"]["column_heldout_surrogates"] is True
     assert payload["cause"] == "load_dependence" and payload["heldout_surrogates"]["load_dependence"]["copies"] == 199
-    assert "method v3.0+column_heldout_surrogates=True" in capsys.readouterr().out
+    assert "method v3.0+column_heldout_surrogates=true" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(
     "args, message",
     [
-        (["{a}", "{b}", "--rules", "alpha=2"], "between 0 and 1"),
+        (["{a}", "{b}", "--rules", "alpha=2"], "a share or a probability"),
         (["{a}", "--rules", "alpha=0.01"], "--rules sets the rules of method v3"),
+        (["--train", "{a}", "--test", "{b}", "--rules", "alpha=0.01"], "--rules sets the rules of the runs method"),
+        (["--train", "{a}", "--test", "{b}", "--method", "v3", "--rules", "alpha=0.01"], "the runs method"),
     ],
 )
 def test_bad_rules_on_the_command_line_are_one_line_and_exit_2(tmp_path, capsys, args, message):

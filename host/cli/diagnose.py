@@ -55,8 +55,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     diag.add_argument(
         "--rules",
         metavar="FIELD=VALUE,...",
-        help="v3: change fields of its rules (host/diagnose/rules.py), e.g. column_first=true or alpha=0.01; "
-        "the verdict's method names them",
+        help="v3 on runs (not --train/--test): change fields of its rules (host/diagnose/rules.py), e.g. "
+        "column_first=true; the verdict's method names them",
     )
     diag.add_argument("--report", metavar="DIR", help="write report.md and PNG figures here")
     diag.add_argument("--json", metavar="OUT.json", help="write the result as JSON ('-' for stdout)")
@@ -148,6 +148,11 @@ def run(args: argparse.Namespace) -> int:
             raise DataError(
                 "--stability checks one recording (pmactl diagnose DATA.csv --stability), not --train/--test"
             )
+        if args.rules:
+            raise DataError(
+                "--rules sets the rules of the runs method (pmactl diagnose RUN.csv ... ); the cross-run comparison "
+                "(--train/--test) takes none: drop --rules"
+            )
         trained = {Path(p).resolve() for p in args.train}
         both = sorted(p for p in args.test if Path(p).resolve() in trained)
         if both:
@@ -162,7 +167,6 @@ def run(args: argparse.Namespace) -> int:
                     f"--method v2 identifies on one training recording and --train matches {len(args.train)}; "
                     "drop --method (several training runs are judged together) or name one --train file"
                 )
-            _v3_rules(args)
             return _cross_runs(args)
         if args.report:
             raise DataError(
@@ -308,7 +312,7 @@ def _cross_runs(args: argparse.Namespace) -> int:
     test = _read_runs(args.test, args)
     _same_units(train + test, args.train + args.test)
     units = _output_unit(train + test)
-    result = cross_runs(train, test, rules=args.rules)
+    result = cross_runs(train, test)
     say(f"{_runs_title(args.train)} -> {_runs_title(args.test)}: cause {result.cause}")
     say(f"  {result.reason}")
     say(f"  {'correction':<18} {'gain':>7} {'90 % interval':>17} {'Clark-West p':>13}")

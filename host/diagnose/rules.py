@@ -191,50 +191,86 @@ RULES = Rules()
 
 
 _TRUE, _FALSE = ("1", "true", "yes", "on"), ("0", "false", "no", "off")
+# the smallest value a field may take from --rules where 0 is meaningless (folds, draws, grids)
+_MINIMUM: dict[str, float] = {
+    "bootstrap_draws": 19,
+    "column_surrogates": 19,
+    "strata_input_bins": 1,
+    "strata_turn_bins": 1,
+    "preisach_levels": 2,
+    "richer_levels": 2,
+    "min_delay_samples": 1,
+    "drift_knots": 2,
+    "max_rows": 200,
+    "max_folds": 2,
+    "min_fold_samples": 10,
+    "min_samples": 20,
+}
+# fields that are shares or probabilities: at most 1
+_AT_MOST_ONE = ("alpha", "surrogate_screen_p", "ladder_drop")
+
+
+def _parsed(key: str, raw: str, current: object) -> object:
+    """``raw`` as the type of ``current`` (ValueError naming what the field takes)."""
+    if isinstance(current, bool):
+        kind = "true or false"
+    elif isinstance(current, int):
+        kind = "a whole number"
+    elif isinstance(current, float):
+        kind = "a number"
+    else:
+        kind = "numbers separated by '/'"
+    if not raw:
+        raise ValueError(f"--rules: {key} needs a value ({key}=...), {kind}")
+    try:
+        if isinstance(current, bool):
+            if raw.lower() not in _TRUE + _FALSE:
+                raise ValueError(raw)
+            return raw.lower() in _TRUE
+        if isinstance(current, int):
+            value: object = int(raw)
+        elif isinstance(current, float):
+            value = float(raw)
+        else:
+            value = tuple(float(v) for v in filter(None, raw.split("/")))
+    except ValueError:
+        raise ValueError(f"--rules: {key}={raw} is not {kind}") from None
+    numbers = value if isinstance(value, tuple) else (value,)
+    if not numbers:
+        raise ValueError(f"--rules: {key}={raw} holds no number; give {kind}")
+    low = _MINIMUM.get(key, 0.0)
+    if not all(math.isfinite(v) and v >= low for v in numbers):
+        raise ValueError(f"--rules: {key}={raw}: {key} takes finite values of {low:g} or more")
+    if key in _AT_MOST_ONE and not 0 < numbers[0] <= 1:
+        raise ValueError(f"--rules: {key}={raw} is a share or a probability; give one above 0 and at most 1")
+    if key == "alpha" and numbers[0] == 1:
+        raise ValueError(f"--rules: alpha={raw} is a false-alarm rate; give one between 0 and 1")
+    return value
+
+
+def _written(value: object) -> str:
+    """A field's value as --rules takes it (true/false, numbers joined by '/')."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, tuple):
+        return "/".join(f"{v:g}" for v in value)
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def with_overrides(text: str, rules: Rules = RULES) -> Rules:
     """``rules`` with ``field=value`` overrides, comma-separated: flags as true/false, numbers as
     numbers, tuples of numbers slash-separated (``output_lags_s=0/0.01/0.1``). The version becomes
-    ``v3.0+overrides`` so a verdict says which rules made it. Bad input: one ValueError naming the
-    field and what it takes."""
+    ``v3.0+field=value,...`` in the same form, so a verdict says which rules made it and the text
+    can be given to --rules again. Bad input: one ValueError naming the field and what it takes."""
     known = {f.name for f in fields(Rules)} - {"extra", "version"}
     changes: dict[str, Any] = {}
     for item in filter(None, (part.strip() for part in text.split(","))):
-        key, equals, raw = item.partition("=")
-        key, raw = key.strip(), raw.strip()
+        key, _, raw = item.partition("=")
+        key = key.strip()
         if key not in known:
             raise ValueError(f"--rules: unknown field {key!r}; use some of {', '.join(sorted(known))}")
-        current = getattr(rules, key)
-        if isinstance(current, bool):
-            kind = "true or false"
-        elif isinstance(current, int):
-            kind = "a whole number"
-        elif isinstance(current, float):
-            kind = "a number"
-        else:
-            kind = "numbers separated by '/'"
-        if not equals or not raw:
-            raise ValueError(f"--rules: {key} needs a value ({key}=...), {kind}")
-        try:
-            if isinstance(current, bool):
-                if raw.lower() not in _TRUE + _FALSE:
-                    raise ValueError(raw)
-                changes[key] = raw.lower() in _TRUE
-            elif isinstance(current, int):
-                changes[key] = int(raw)
-            elif isinstance(current, float):
-                changes[key] = float(raw)
-            else:
-                changes[key] = tuple(float(v) for v in filter(None, raw.split("/")))
-        except ValueError:
-            raise ValueError(f"--rules: {key}={raw} is not {kind}") from None
-        values = changes[key] if isinstance(changes[key], tuple) else (changes[key],)
-        if not all(math.isfinite(v) and v >= 0 for v in values):
-            raise ValueError(f"--rules: {key}={raw}: every field takes finite values of 0 or more")
-    if not 0 < changes.get("alpha", rules.alpha) < 1:
-        raise ValueError(f"--rules: alpha={changes['alpha']} is a false-alarm rate; give one between 0 and 1")
+        changes[key] = _parsed(key, raw.strip(), getattr(rules, key))
     if not changes:
         return rules
-    applied = ",".join(f"{k}={v}" for k, v in changes.items())
+    applied = ",".join(f"{k}={_written(v)}" for k, v in changes.items())
     return replace(rules, **changes, version=f"{rules.version}+{applied}")

@@ -348,6 +348,13 @@ def diagnose_runs(
         passers, column_heldout = column_passers(
             rs, base, groups, tests, trial, masks, rules, seed, lambda text: _say(progress, text)
         )
+        unreachable = [g for g, r in column_heldout.items() if 1.0 / (r.copies + 1) > tests[g].level]
+        if unreachable:
+            notes.append(
+                f"the held-out column test of {', '.join(unreachable)} cannot pass: {rules.column_surrogates} copies "
+                f"give p >= {1.0 / (rules.column_surrogates + 1):.2g}, above the column's level "
+                f"{tests[unreachable[0]].level:.2g}; raise column_surrogates"
+            )
         choice = with_columns(choice, passers, trial)
         if choice.cause in passers:
             cannot_tell = []
@@ -412,7 +419,11 @@ def explain(d: DiagnosisV3, tested: str) -> str:
             if hv
             else ""
         )
-        also = f"; also significant on its own (not checked held out): {', '.join(d.also)}" if d.also else ""
+        checked = [g for g in d.also if g in d.trials and confirmed(d.trials[g], d.rules)]
+        unchecked = [g for g in d.also if g not in checked]
+        also = f"; also confirmed held out: {', '.join(checked)}" if checked else ""
+        if unchecked:
+            also += f"; also significant on its own (not checked held out): {', '.join(unchecked)}"
         if d.rejected:
             also += f"; passed on the record but failed held out or with a richer baseline: {', '.join(d.rejected)}"
         if d.cause in d.column_heldout:
