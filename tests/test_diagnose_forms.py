@@ -52,8 +52,6 @@ def test_what_is_left_of_the_baseline_lag_after_a_dead_time_is_on_its_grid():
     assert _lag_left(Ctx(), 0.03) == 0.0  # type: ignore[arg-type]
 
 
-# 13.5 s (the default run's budget); test_diagnose.py and test_diagnose_signatures.py name dead time by default
-@pytest.mark.slow
 def test_a_dead_time_of_six_samples_at_one_kilohertz_is_named():
     """Under the 10 ms a grid in seconds began at: 6 ms at 1 kHz (the grid's nearest is 5 or 7 ms)."""
     dt, pressure = pulse_pressure(1000.0, 25.0)

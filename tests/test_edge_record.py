@@ -44,9 +44,8 @@ def run_rms(config: Path, bundle: Path | None, capsys: pytest.CaptureFixture[str
     ("protocol", "fit_options", "url"),
     [
         ("triangles", [], "sim://rig?clock=lockstep"),
-        # 11-13 s each: the FORC fit and the creeping rig run with -m slow (the default run's budget)
-        pytest.param("forc", ["--preisach-method", "forc"], "sim://rig?clock=lockstep", marks=pytest.mark.slow),
-        pytest.param("triangles", [], "sim://rig?clock=lockstep&effect=creep&seed=4", marks=pytest.mark.slow),
+        ("forc", ["--preisach-method", "forc"], "sim://rig?clock=lockstep"),
+        ("triangles", [], "sim://rig?clock=lockstep&effect=creep&seed=4"),
     ],
 )
 def test_record_fit_run_feedforward_beats_pid(
