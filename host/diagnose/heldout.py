@@ -63,6 +63,10 @@ def scoring_name(clustered: bool, whitened: bool) -> str:
     return f"{'clusters' if clustered else 'rows'}/{'white' if whitened else 'raw'}"
 
 
+# the fewest held-out rows a comparison scores before it falls back to every row
+MIN_SCORED_ROWS = 10
+
+
 @dataclass
 class HeldOut:
     base_rmse: float  # [units of y]
@@ -113,7 +117,6 @@ def held_out(
     innovations), so slow excursions of a structural misfit do not decide them; the reported RMS and
     gain stay those of the raw errors [units of y]."""
     y = rs.y
-    scored = np.zeros(y.size, dtype=bool)
     base = np.empty_like(y)
     ext = np.empty_like(y)
     extended = np.hstack([nuisance, group])
@@ -122,17 +125,13 @@ def held_out(
         train = ~held
         base[held] = nuisance[held] @ ridge_fit(nuisance[train], y[train], smoothness, ridge)
         ext[held] = extended[held] @ ridge_fit(extended[train], y[train], smoothness, ridge, group.shape[1])
-        rows = held.copy()
-        if column is not None:
-            rows &= (column >= column[train].min()) & (column <= column[train].max())
-        scored |= rows
+        rows = fold_rows(held, column)
         if not rows.any():
             fold_gains.append(float("nan"))
             continue
         b = float(np.sqrt(np.mean((base[rows] - y[rows]) ** 2)))
         fold_gains.append(1.0 - float(np.sqrt(np.mean((ext[rows] - y[rows]) ** 2))) / (b or 1.0))
-    if scored.sum() < 10:
-        scored[:] = True  # nothing inside the training ranges: score every row rather than none
+    scored = scored_rows(masks, column)
     eb, ee = (base[scored] - y[scored]) ** 2, (ext[scored] - y[scored]) ** 2
     base_rmse, ext_rmse = float(np.sqrt(eb.mean())), float(np.sqrt(ee.mean()))
     t_cw, interval = held_out_statistics(rs, base, ext, scored, rng, clusters, whitener)
@@ -149,6 +148,26 @@ def held_out(
         ext,
         scored,
     )
+
+
+def fold_rows(held: NDArray[np.bool_], column: NDArray[np.float64] | None) -> NDArray[np.bool_]:
+    """The held-out rows one fold scores: all of them, or with a measured ``column`` those whose
+    value lies inside the training rows' range (a column term is not asked to extrapolate)."""
+    if column is None:
+        return held.copy()
+    train = column[~held]
+    return np.asarray(held & (column >= train.min()) & (column <= train.max()), dtype=bool)
+
+
+def scored_rows(masks: list[NDArray[np.bool_]], column: NDArray[np.float64] | None) -> NDArray[np.bool_]:
+    """Every fold's :func:`fold_rows`; every row when fewer than :data:`MIN_SCORED_ROWS` are left
+    (nothing inside the training ranges: score every row rather than none)."""
+    scored = np.zeros(masks[0].size, dtype=bool)
+    for held in masks:
+        scored |= fold_rows(held, column)
+    if scored.sum() < MIN_SCORED_ROWS:
+        scored[:] = True
+    return scored
 
 
 def held_out_statistics(

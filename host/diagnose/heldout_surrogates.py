@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from host.diagnose.heldout import scored_rows
 from host.diagnose.nuisance import ridge_penalty
 
 Matrix = NDArray[np.float64]
@@ -101,14 +102,8 @@ def held_out_gain(
     masks: list[NDArray[np.bool_]],
 ) -> float:
     """1 - RMS(ext - y) / RMS(base - y) over the held-out rows whose column value lies inside the
-    training folds' range (as :func:`host.diagnose.heldout.held_out` scores a column)."""
-    rows = np.zeros(y.size, dtype=bool)
-    for held in masks:
-        train = values[~held]
-        if train.size:
-            rows |= held & (values >= train.min()) & (values <= train.max())
-    if rows.sum() < 10:
-        rows[:] = True
+    training folds' range (:func:`host.diagnose.heldout.scored_rows`, as ``held_out`` scores a column)."""
+    rows = scored_rows(masks, values)
     eb = float(np.mean((base[rows] - y[rows]) ** 2))
     ee = float(np.mean((ext[rows] - y[rows]) ** 2))
     return 1.0 - float(np.sqrt(ee / eb)) if eb > 0 else 0.0
