@@ -113,10 +113,17 @@ class Baseline:
         return float(np.std(self.prediction))
 
 
+def linear_stage(
+    rs: RunSet, v: NDArray[np.float64], lag_s: float, resonance: tuple[float, float], second_lag_s: float
+) -> NDArray[np.float64]:
+    """``v`` through an output lag [s], a second lag in series [s] (0: none), then a second-order
+    stage (f [Hz], zeta; f 0: none), each run from its own first sample."""
+    return run_resonance(rs, run_lowpass(rs, run_lowpass(rs, v, lag_s), second_lag_s), *resonance)
+
+
 def through_stage(rs: RunSet, base: Baseline, v: NDArray[np.float64]) -> NDArray[np.float64]:
     """``v`` through the baseline's linear dynamics: its output lag(s), then its second-order stage."""
-    lagged = run_lowpass(rs, run_lowpass(rs, v, base.lag_s), base.second_lag_s)
-    return run_resonance(rs, lagged, *base.resonance)
+    return linear_stage(rs, v, base.lag_s, base.resonance, base.second_lag_s)
 
 
 def fit_baseline(
@@ -156,35 +163,32 @@ def fit_baseline(
         coef = np.linalg.lstsq(z, y, rcond=None)[0]
         return float(np.sum((z @ coef - y) ** 2))
 
-    def stage(v: NDArray[np.float64], tau: float, fz: tuple[float, float], tau2: float) -> NDArray[np.float64]:
-        return run_resonance(rs, run_lowpass(rs, run_lowpass(rs, v, tau), tau2), *fz)
-
     # two lags in series are chosen on a static fit's output that lags the wrong way: one more
     # alternation (choose on the masses refitted through the first choice) finds the pair
     for _ in range(2 if series_lags_s else 1):
         lagged_by = {pair: run_lowpass(rs, run_lowpass(rs, x, pair[0]), pair[1]) for pair in pairs}
         (lag, second), resonance = min(((pair, fz) for pair in pairs for fz in stages), key=stage_error)
-        lagged_nodes = stage(nodes, lag, resonance, second)
+        lagged_nodes = linear_stage(rs, nodes, lag, resonance, second)
         theta = ridge_fit(np.hstack([lagged_nodes, ones]), y, smoothness, ridge)
         x = nodes @ theta[:-1]
 
     xc = (x - x.mean()) / (np.std(x) or 1.0)
-    lagged_x = stage(x, lag, resonance, second)
+    lagged_x = linear_stage(rs, x, lag, resonance, second)
     columns = [
-        stage(x, 1.5 * lag + rs.dt, resonance, second) - lagged_x,  # a longer output lag
-        stage(run_gradient(rs, x), lag, resonance, second) * rs.dt,  # an input lead (snubber on the reading)
-        stage(xc**2, lag, resonance, second),  # the static output map
-        stage(xc**3, lag, resonance, second),
-    ] + [stage(x, tau, resonance, second) - lagged_x for tau in extra_lags_s if tau != lag]
+        linear_stage(rs, x, 1.5 * lag + rs.dt, resonance, second) - lagged_x,  # a longer output lag
+        linear_stage(rs, run_gradient(rs, x), lag, resonance, second) * rs.dt,  # an input lead (snubber on the reading)
+        linear_stage(rs, xc**2, lag, resonance, second),  # the static output map
+        linear_stage(rs, xc**3, lag, resonance, second),
+    ] + [linear_stage(rs, x, tau, resonance, second) - lagged_x for tau in extra_lags_s if tau != lag]
     if resonance[0] > 0:  # the stage's own tangents: a stiffer or softer payload, more or less damping
         f, z = resonance
         columns += [
-            stage(x, lag, (1.25 * f, z), second) - lagged_x,
-            stage(x, lag, (f, z + 0.15), second) - lagged_x,
+            linear_stage(rs, x, lag, (1.25 * f, z), second) - lagged_x,
+            linear_stage(rs, x, lag, (f, z + 0.15), second) - lagged_x,
         ]
     if series_lags_s:  # the second lag's tangent (a longer one; from none: the shortest of its grid)
         longer = 1.5 * second + rs.dt if second > 0 else min(seconds[1:], default=rs.dt)
-        columns.append(stage(x, lag, resonance, longer) - lagged_x)
+        columns.append(linear_stage(rs, x, lag, resonance, longer) - lagged_x)
     nuisance = np.hstack([lagged_nodes, np.column_stack(columns), ones])
     coef = ridge_fit(nuisance, y, smoothness, ridge)
     return Baseline(nuisance, smoothness, x, nuisance @ coef, lag, resonance, second)
