@@ -44,7 +44,7 @@ def scored(case: Any, data: Path, rules: Rules) -> dict[str, Any]:
     true_test = d.tests.get(case.effect)
     oracle = None
     if case.effect != "none":  # the true effect waveform as one regressor beyond the same baseline
-        waves = [Measurement(m.t, m.u, e, {}, m.source) for m, e in zip(runs, truth["waveforms"])]
+        waves = [Measurement(m.t, m.u, e, {}, m.source) for m, e in zip(runs, truth["oracle_waveforms"])]
         wave = run_set(waves, rules.max_rows, rules.min_samples).y
         oracle = oracle_p(wave, whitened(d.runset, d.baseline, rules))
     return {

@@ -51,6 +51,10 @@ MIN_OVER_NOISE = 5.0
 SEED_BASE = 7300
 RATE_LOWPASS_S = 0.1
 CREEP_TAUS_S = (1.0, 30.0)
+# the oracle's waveform is the effect computed from y smoothed over this window [s] (cubic
+# Savitzky-Golay): an effect made from the measured y (a shift, a lag, a relaxation of y) carries
+# y's own noise, and a regressor holding the record's noise "detects" itself
+ORACLE_SMOOTHING_S = 0.2
 
 
 @dataclass(frozen=True)
@@ -151,6 +155,15 @@ def _unit_effects(
     return lambda g: [sign * g * ch * (y - y_ref) for ch, (_, _, y) in zip(changes, runs)], p
 
 
+def _smoothed(t: Array, y: Array) -> Array:
+    """``y`` smoothed over :data:`ORACLE_SMOOTHING_S` (cubic Savitzky-Golay on the run's mean step)."""
+    from scipy.signal import savgol_filter
+
+    step = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    window = min(2 * int(ORACLE_SMOOTHING_S / step / 2) + 1, y.size - (1 - y.size % 2))
+    return np.asarray(savgol_filter(y, window, 3), dtype=np.float64) if window > 3 else y
+
+
 def _rms(parts: list[Array]) -> float:
     x = np.concatenate(parts)
     return float(np.sqrt(np.mean(x * x)))
@@ -181,11 +194,16 @@ def injected_runs(case: RunsCase, data_root: Path) -> tuple[list[Measurement], d
     target = float(np.clip(rng.uniform(*TARGET_OVER_SPAN) * span, MIN_OVER_NOISE * noise, 0.12 * span))
     effects = [np.zeros_like(y) for _, _, y in runs]
     parameters: dict[str, Any] = {}
+    oracle = effects
     if case.effect != "none":
+        state = rng.bit_generator.state
         make, parameters = _unit_effects(case, runs, cols, rng)
         intensity = _solve(make, _rms, target, case.form not in ("rate_lag", "shift"))
         effects = make(intensity)
         parameters["intensity"] = intensity
+        rng.bit_generator.state = state  # the same draws, on the noise-free run
+        smooth = [(t, u, _smoothed(t, y)) for t, u, y in runs]
+        oracle = _unit_effects(case, smooth, cols, rng)[0](intensity)
     noise_rng = np.random.default_rng(case.seed + 50_000)  # column sensor noise
     out = []
     for path, (t, u, y), e, c in zip(paths, runs, effects, cols):
@@ -207,5 +225,7 @@ def injected_runs(case: RunsCase, data_root: Path) -> tuple[list[Measurement], d
         "effect_size_over_noise": size / noise if noise > 0 else float("inf"),
         "temperature_pattern": pattern,
         "waveforms": effects,  # the injected effect per run on the run's own time [mm]
+        # the same effect made from the smoothed y (no copy of the record's own noise): the oracle's regressor
+        "oracle_waveforms": oracle,
     }
     return out, truth
