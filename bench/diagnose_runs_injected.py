@@ -59,6 +59,7 @@ def scored(case: Any, data: Path, rules: Rules) -> dict[str, Any]:
         "oracle_detects": oracle is not None and oracle <= rules.alpha / max(len(d.tests), 1),
         "rejected": d.rejected,
         "cannot_tell": d.cannot_tell,
+        "also_confirmed": [g for g, _ in d.further],
         "runs": truth["runs"],
         "samples": truth["samples"],
         "size_over_span": truth["effect_size_over_span"],
@@ -75,6 +76,7 @@ def line(r: dict[str, Any]) -> str:
     interval = "" if r["interval"] is None else f" [{r['interval'][0]:+.0%}, {r['interval'][1]:+.0%}]"
     extra = f" rejected {','.join(r['rejected'])}" if r["rejected"] else ""
     extra += f" cannot tell {','.join(r['cannot_tell'])}" if r["cannot_tell"] else ""
+    extra += f" also confirmed {','.join(r['also_confirmed'])}" if r["also_confirmed"] else ""
     return (
         f"{mark:<5} {r['case']:<52} -> {r['verdict']:<18} gain {r['gain']:6.1%}{interval} true p {p} "
         f"size {r['size_over_span']:.1%} ({r['size_over_noise']:.0f}x noise) {r['runs']} runs "
@@ -84,13 +86,14 @@ def line(r: dict[str, Any]) -> str:
 
 def summary(rows: list[dict[str, Any]]) -> None:
     effects = sorted({r["effect"] for r in rows if r["effect"] != "none"})
-    print("\n| effect | named | unique test passed | oracle detects |\n|---|---|---|---|")
+    print("\n| effect | named | named or also confirmed | unique test passed | oracle detects |\n|---|---|---|---|---|")
     for e in effects:
         mine = [r for r in rows if r["effect"] == e]
         passed = sum(r["true_unique_p"] is not None and r["true_unique_p"] <= r["true_level"] for r in mine)
         oracle = sum(r["oracle_detects"] for r in mine)
         print(
-            f"| {e} | {sum(r['verdict'] == e for r in mine)}/{len(mine)} | {passed}/{len(mine)} "
+            f"| {e} | {sum(r['verdict'] == e for r in mine)}/{len(mine)} "
+            f"| {sum(e in [r['verdict'], *r['also_confirmed']] for r in mine)}/{len(mine)} | {passed}/{len(mine)} "
             f"| {oracle}/{len(mine)} |"
         )
     injected = [r for r in rows if r["effect"] != "none"]
@@ -107,7 +110,9 @@ def summary(rows: list[dict[str, Any]]) -> None:
     for r in rows:
         if r["effect"] == "none":
             flag = "  FALSE ALARM (decoy column)" if r["verdict"] in column_causes else ""
-            print(f"  {r['case']}: {r['verdict']} (gain {r['gain']:.1%}){flag}")
+            also = f"; also confirmed {', '.join(r['also_confirmed'])}" if r["also_confirmed"] else ""
+            flag += "  FALSE ALARM (decoy column confirmed too)" if set(r["also_confirmed"]) & column_causes else ""
+            print(f"  {r['case']}: {r['verdict']} (gain {r['gain']:.1%}){also}{flag}")
 
 
 def main(argv: list[str] | None = None) -> int:

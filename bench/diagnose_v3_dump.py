@@ -38,6 +38,7 @@ from bench.plants import engine  # noqa: E402
 from bench.plants.families import FAMILIES, family_names  # noqa: E402
 from bench.plants.registry import specs  # noqa: E402
 from host.data import Measurement  # noqa: E402
+from host.diagnose.actuator import with_actuator  # noqa: E402
 from host.diagnose.conditional import (  # noqa: E402
     GroupTest,
     block_length,
@@ -56,7 +57,17 @@ from host.diagnose.heldout import (  # noqa: E402
 from host.diagnose.nuisance import ar_whitener  # noqa: E402
 from host.diagnose.rules import CAUSES, RULES, Rules, with_overrides  # noqa: E402
 from host.diagnose.runs import run_set  # noqa: E402
-from host.diagnose.v3 import choose, column_heldout_test, confirmed, decide, richer_rung, score, with_columns  # noqa: E402
+from host.diagnose.v3 import (  # noqa: E402
+    choose,
+    column_heldout_test,
+    confirmed,
+    decide,
+    faded,
+    further_causes,
+    richer_rung,
+    score,
+    with_columns,
+)
 
 
 def overridden(text: str, rules: Rules = RULES) -> Rules:
@@ -89,7 +100,7 @@ def _richer_json(t: GroupTest) -> dict[str, float]:
 
 def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int = 0) -> dict[str, Any]:
     """Every input of a v3 decision on one record (see module docstring)."""
-    rs = run_set([m], rules.max_rows, rules.min_samples)
+    rs = with_actuator(run_set([m], rules.max_rows, rules.min_samples), rules)
     base, groups, tests, _ = score(rs, rules.preisach_levels, rules, seed)
     richer = richer_rung(rs, rules, seed)
     masks, _ = holdout_folds(rs, rules)
@@ -138,6 +149,29 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
         choice = with_columns(choice, passers, trials.__getitem__)
         if choice.cause in passers:
             cannot_tell = []  # as diagnose_runs: a named column leaves nothing untold
+    clusters = labels if rules.heldout_clusters else None
+    whitener = ar if rules.heldout_whitened else None
+
+    def trial_beyond(candidate: str, before: list[str]) -> HeldOut:
+        column = CAUSES[candidate].column
+        return held_out(
+            rs,
+            np.hstack([base.nuisance, *(groups[g] for g in before)]),
+            base.smoothness,
+            groups[candidate],
+            masks,
+            rules.node_ridge,
+            np.random.default_rng(seed),
+            rs.columns.get(column) if column else None,
+            clusters,
+            whitener,
+            [groups[g].shape[1] for g in before],
+        )
+
+    also = [g for g in ranked if g != choice.cause and g not in choice.rejected]
+    further = further_causes(
+        choice.cause, [g for g in also if not faded(g, tests, lambda: richer, rules)], trial_beyond, rules
+    )
     oracle = None
     if wave is not None:
         w = whitened(rs, base, rules)
@@ -146,6 +180,8 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
     return {
         "verdict": choice.cause,
         "cannot_tell": cannot_tell,
+        # causes confirmed held out beyond the named one, in turn (live rules only: not replayed)
+        "further": [{"cause": g, **_trial_json(h)} for g, h in further],
         "tests": {g: t.as_json() for g, t in tests.items()},
         "richer": {g: _richer_json(t) for g, t in richer.items()},
         "trials": {g: _trial_json(h) for g, h in trials.items()},
@@ -153,6 +189,8 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
         "oracle_p": oracle,
         "heldout_surrogates": {g: r.as_json() for g, r in surrogates.items()},
         "baseline_columns": int(base.nuisance.shape[1]),
+        "input_lag_s": rs.input_lag_s,
+        "output_lag_s": base.lag_s,
     }
 
 

@@ -31,6 +31,7 @@ from bench.plants import engine  # noqa: E402
 from bench.plants.families import FAMILIES, family_names  # noqa: E402
 from bench.plants.registry import specs  # noqa: E402
 from host.data import Measurement  # noqa: E402
+from host.diagnose.actuator import with_actuator  # noqa: E402
 from host.diagnose.conditional import block_length, orthonormal, stationary_draws, whitened  # noqa: E402
 from host.diagnose.rules import RULES  # noqa: E402
 from host.diagnose.runs import run_set  # noqa: E402
@@ -40,7 +41,7 @@ from host.diagnose.v3 import diagnose_runs, score  # noqa: E402
 def oracle_p(m: Measurement, waveform: np.ndarray, tests: int) -> float:
     """Block-bootstrap p of the true effect waveform as one regressor beyond v3's baseline, at the
     level of one of ``tests`` causes (returned p is compared with alpha / tests by the caller)."""
-    rs = run_set([m], RULES.max_rows, RULES.min_samples)
+    rs = with_actuator(run_set([m], RULES.max_rows, RULES.min_samples), RULES)  # the baseline diagnose_runs uses
     wave = run_set([Measurement(m.t, m.u, waveform, {}, m.source)], RULES.max_rows, RULES.min_samples).y
     base = score(rs, RULES.preisach_levels, RULES, 0)[0]
     w = whitened(rs, base, RULES)

@@ -15,7 +15,7 @@ from tests.test_diagnose_v3 import runs_of, write_runs
 def test_overrides_change_the_fields_and_name_the_version():
     rules = with_overrides("column_first=true, alpha=0.01,output_lags_s=0/0.05")
     assert (rules.column_first, rules.alpha, rules.output_lags_s) == (True, 0.01, (0.0, 0.05))
-    assert rules.version == "v3.0+column_first=true,alpha=0.01,output_lags_s=0/0.05"
+    assert rules.version == "v3.1+column_first=true,alpha=0.01,output_lags_s=0/0.05"
     assert with_overrides(rules.version.partition("+")[2]) == rules  # the method string is --rules text
     assert with_overrides("") is RULES and with_overrides("max_folds=3").max_folds == 3
 
@@ -53,10 +53,10 @@ def test_the_cli_runs_v3_with_the_rules_given_and_writes_them_into_the_json(tmp_
     )
     assert code == 0
     payload = json.loads(out.read_text())
-    assert payload["method"] == "v3.0+column_heldout_surrogates=true"
+    assert payload["method"] == "v3.1+column_heldout_surrogates=true"
     assert payload["rules"]["column_heldout_surrogates"] is True
     assert payload["cause"] == "load_dependence" and payload["heldout_surrogates"]["load_dependence"]["copies"] == 199
-    assert "method v3.0+column_heldout_surrogates=true" in capsys.readouterr().out
+    assert "method v3.1+column_heldout_surrogates=true" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(

@@ -34,7 +34,7 @@ def pi_core(u: np.ndarray, seed: int) -> np.ndarray:
     weights = rng.uniform(0.5, 1.5, thresholds.size) * np.exp(-thresholds)
     plays = play_outputs(u, thresholds, u[0] - thresholds)
     x = plays @ weights
-    return 4.0 * x + 0.3 * x**2 / max(1.0, float(np.ptp(x)))
+    return 4.0 * x + 0.05 * x**2  # one static map for every run (not scaled by a run's own span)
 
 
 def cycle_run(seed: int, seconds: float, peak: float) -> tuple[np.ndarray, np.ndarray]:
@@ -54,7 +54,8 @@ def noisy(y: np.ndarray, rng: np.random.Generator, sd: float = 0.02) -> np.ndarr
 
 def runs_of(seed: int, n_runs: int, effect: str, size: float = 1.0) -> list[Measurement]:
     """``n_runs`` short cycles (4-7 s, peaks 4-6 bar) of one plant; ``effect``: none, load
-    (one hanging mass per run, the stroke scales with it) or creep (a 2 s relaxation)."""
+    (one hanging mass per run, the stroke scales with it), creep (a 2 s relaxation) or both
+    joined by "+" (``load+creep``)."""
     rng = np.random.default_rng(seed)
     runs = []
     loads = rng.permutation(np.linspace(0.0, 2.0, n_runs))
@@ -63,9 +64,9 @@ def runs_of(seed: int, n_runs: int, effect: str, size: float = 1.0) -> list[Meas
         u = np.r_[np.zeros(8), u]
         t = np.arange(u.size) / RATE_HZ
         x = pi_core(u, seed)
-        if effect == "creep":
+        if "creep" in effect.split("+"):
             x = x + size * 0.3 * (lowpass(x, 1 / RATE_HZ, 2.0) - x)
-        if effect == "load":
+        if "load" in effect.split("+"):
             x = x * (1.0 - size * 0.08 * loads[i])
         y = noisy(lowpass(x, 1 / RATE_HZ, 0.05), rng)
         extras = {"load": np.full(u.size, loads[i])}
@@ -97,12 +98,12 @@ def test_every_group_is_a_row_of_the_cause_table_and_the_rules_are_one_frozen_ob
     assert json.dumps(RULES.as_json())  # a verdict's rules can be written next to it
 
 
-@pytest.mark.parametrize("seed", [3, 4])
-def test_effect_free_runs_of_a_plant_the_baseline_can_represent_name_nothing(seed):
-    d = diagnose_runs(runs_of(seed, 12, "none"))
-    assert d.cause == "none", d.reason
-    assert d.gain == 0.0
-    assert "whole runs" in d.holdout  # short runs: the folds leave whole runs out
+def test_effect_free_runs_of_a_plant_the_baseline_can_represent_rarely_name_a_cause():
+    # one family-wise alpha of 5 % per record: six plants may show one false alarm, not two
+    found = [diagnose_runs(runs_of(seed, 12, "none")) for seed in range(3, 9)]
+    assert sum(d.cause != "none" for d in found) <= 1, [(d.cause, d.reason) for d in found if d.cause != "none"]
+    assert all(d.gain == 0.0 for d in found if d.cause == "none")
+    assert all("whole runs" in d.holdout for d in found)  # short runs: the folds leave whole runs out
 
 
 def test_a_load_that_differs_between_runs_is_named_with_a_held_out_gain():
@@ -168,13 +169,15 @@ def _tuning_record(name: str) -> Measurement:
 COMPOSITE = dataclasses.replace(RULES, composite_draws=99)
 
 
-def test_the_composite_null_keeps_an_effect_free_bouc_wen_record_at_none():
+def test_the_padded_baseline_and_the_composite_null_keep_an_effect_free_bouc_wen_record_at_none():
     m = _tuning_record("bouc_wen/none:none/multisine@50Hz/s100")
     plain = diagnose_runs([m])
-    # the Preisach baseline's structural error on a Bouc-Wen plant passes the noise-only nulls ...
-    assert plain.tests["rate_dependence"].unique_p <= plain.tests["rate_dependence"].level
+    # the Preisach baseline on a grid ending at the input's range with a lag chosen on a static fit
+    # left a structural error on this Bouc-Wen plant that passed the rate test against the noise-only
+    # nulls; the padded grid with a profiled lag holds it (rate p 0.81 where it was 0.004) ...
+    assert plain.tests["rate_dependence"].unique_p > plain.tests["rate_dependence"].level
     d = diagnose_runs([m], rules=COMPOSITE)
-    # ... but not the simulated effect-free classes fitted to the same record
+    # ... and the simulated effect-free classes fitted to the same record keep every dynamic cause out
     assert d.cause == "none", d.reason
     for g, t in d.tests.items():
         if CAUSES[g].kind != "column":

@@ -119,8 +119,8 @@ def bouc_wen(rs: RunSet, lag_s: float) -> NDArray[np.float64]:
 
 def null_classes(rs: RunSet, base: Baseline, rules: Rules) -> list[NullClass]:
     """The effect-free classes of the composite null, fitted to the record."""
-    nodes, _ = preisach_nodes(rs, rules.richer_levels)
-    smooth = node_differences(rules.richer_levels)
+    nodes, _ = preisach_nodes(rs, rules.richer_levels, rules.preisach_pad_levels)
+    smooth = node_differences(rules.richer_levels + 2 * rules.preisach_pad_levels)
     lagged = np.column_stack([run_lowpass(rs, nodes, base.lag_s), np.ones(rs.y.size)])
     richer = lagged @ ridge_fit(lagged, rs.y, smooth.T @ smooth, rules.node_ridge)
     fits = {
@@ -172,8 +172,8 @@ def class_nuisance(rs: RunSet, base: Baseline, rules: Rules) -> Matrix:
     plays = pi_plays(rs)
     bw_core, bw_fit = bouc_wen_core(rs, lag)
     pi_fit = _cubic_map(rs, plays, lag)
-    nodes, _ = preisach_nodes(rs, rules.richer_levels)
-    smooth = node_differences(rules.richer_levels)
+    nodes, _ = preisach_nodes(rs, rules.richer_levels, rules.preisach_pad_levels)
+    smooth = node_differences(rules.richer_levels + 2 * rules.preisach_pad_levels)
     lagged = np.column_stack([run_lowpass(rs, nodes, lag), np.ones(rs.y.size)])
     richer = lagged @ ridge_fit(lagged, rs.y, smooth.T @ smooth, rules.node_ridge)
     columns = [run_lowpass(rs, plays, lag), run_lowpass(rs, bw_core, lag)]

@@ -11,6 +11,7 @@ one-sided).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -105,8 +106,11 @@ def held_out(
     column: NDArray[np.float64] | None = None,
     clusters: NDArray[np.int64] | None = None,
     whitener: NDArray[np.float64] | None = None,
+    penalised_tail: Sequence[int] = (),
 ) -> HeldOut:
-    """Both models per fold (see module docstring). With a measured ``column``, a fold scores only
+    """Both models per fold (see module docstring). The last columns of ``nuisance``, in blocks of
+    the widths ``penalised_tail`` (causes already named, tested beyond), carry the same ridge in
+    both fits, each block scaled by itself as ``group`` is. With a measured ``column``, a fold scores only
     the held-out rows whose column value lies inside its training rows' range: a column term is
     not asked to extrapolate to loads or temperatures it never saw (such rows are left out of
     every score, the baseline's included). With ``clusters`` (a label per row,
@@ -123,8 +127,10 @@ def held_out(
     fold_gains = []
     for held in masks:
         train = ~held
-        base[held] = nuisance[held] @ ridge_fit(nuisance[train], y[train], smoothness, ridge)
-        ext[held] = extended[held] @ ridge_fit(extended[train], y[train], smoothness, ridge, group.shape[1])
+        base[held] = nuisance[held] @ ridge_fit(nuisance[train], y[train], smoothness, ridge, penalised_tail)
+        ext[held] = extended[held] @ ridge_fit(
+            extended[train], y[train], smoothness, ridge, [*penalised_tail, group.shape[1]]
+        )
         rows = fold_rows(held, column)
         if not rows.any():
             fold_gains.append(float("nan"))

@@ -1,9 +1,11 @@
 """The baseline of diagnosis v3: what is *not* an effect, as a linear nuisance space.
 
-``M0``: rate-independent Preisach hysteresis (Everett nodes on a grid, ridge-regularised) after
-which one first-order output lag acts (the rig's mechanics, its time constant chosen from
-:attr:`host.diagnose.rules.Rules.output_lags_s`), plus the directions in which M0's own
-settings could move it: the lag's tangent, an input lead (a snubber on the pressure reading),
+``M0``: rate-independent Preisach hysteresis (Everett nodes on a grid padded beyond the input's
+range, smoothness-regularised; :func:`host.diagnose.runs.preisach_nodes`) after which one
+first-order output lag acts (the rig's mechanics, its time constant chosen from
+:attr:`host.diagnose.rules.Rules.output_lags_s` by profile least squares), plus the directions
+in which M0's own settings could move it: the lag's tangent, an input lead (a snubber on the
+pressure reading),
 a static output map (the square and cube of the hysteresis output). Nothing in it depends on
 the input's speed, on time, or on a measured column, so a timing or column effect keeps its own
 part. The AR model of M0's residual (order by BIC) whitens every statistic.
@@ -11,6 +13,7 @@ part. The AR model of M0's residual (order by BIC) whitens every statistic.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -70,19 +73,24 @@ def ridge_fit(
     y: NDArray[np.float64],
     smoothness: NDArray[np.float64],
     strength: float,
-    tail_cols: int = 0,
+    tail_cols: int | Sequence[int] = 0,
 ) -> NDArray[np.float64]:
     """Penalised least squares: ``strength`` x the block's mean diagonal x ``smoothness`` (a
     k x k matrix, D^T D of neighbouring-node differences) on the first k columns (the Preisach
     nodes: smooth, so cells no training row visits take their neighbours' values), and a ridge
-    of ``strength`` on the last ``tail_cols`` (a cause's group: collinear with the nuisance's
-    lags, it must not cancel them in training and fail held out)."""
+    of ``strength`` x its own mean diagonal on each block of the last columns (``tail_cols``: the
+    blocks' widths in order, or one width; a cause's group: collinear with the nuisance's lags, it
+    must not cancel them in training and fail held out). Each block is scaled by itself, so a
+    group carries the same ridge whatever other groups sit beside it."""
     gram = design.T @ design
     return np.asarray(np.linalg.solve(gram + ridge_penalty(gram, smoothness, strength, tail_cols), design.T @ y))
 
 
 def ridge_penalty(
-    gram: NDArray[np.float64], smoothness: NDArray[np.float64], strength: float, tail_cols: int = 0
+    gram: NDArray[np.float64],
+    smoothness: NDArray[np.float64],
+    strength: float,
+    tail_cols: int | Sequence[int] = 0,
 ) -> NDArray[np.float64]:
     """The penalty :func:`ridge_fit` adds to ``gram`` (the design's X^T X): see there; for fits
     assembled from Gram blocks (:mod:`host.diagnose.heldout_surrogates`)."""
@@ -91,8 +99,12 @@ def ridge_penalty(
     penalty = np.diag(np.full(gram.shape[0], 1e-10 * (float(diag.mean()) or 1.0)))
     if k:
         penalty[:k, :k] += strength * (float(diag[:k].mean()) or 1.0) * (smoothness + 1e-4 * np.eye(k))
-    if tail_cols:
-        penalty[-tail_cols:, -tail_cols:] += strength * (float(diag[-tail_cols:].mean()) or 1.0) * np.eye(tail_cols)
+    blocks = [tail_cols] if isinstance(tail_cols, int) else list(tail_cols)
+    stop = gram.shape[0]
+    for width in reversed([w for w in blocks if w]):
+        block = slice(stop - width, stop)
+        penalty[block, block] += strength * (float(diag[block].mean()) or 1.0) * np.eye(width)
+        stop -= width
     return penalty
 
 
@@ -126,6 +138,10 @@ def through_stage(rs: RunSet, base: Baseline, v: NDArray[np.float64]) -> NDArray
     return linear_stage(rs, v, base.lag_s, base.resonance, base.second_lag_s)
 
 
+# rows the profile choice of the output lag in :func:`fit_baseline` uses at most (every k-th row)
+PROFILE_ROWS = 2_000
+
+
 def fit_baseline(
     rs: RunSet,
     nodes: NDArray[np.float64],
@@ -137,8 +153,9 @@ def fit_baseline(
     resonance_zetas: tuple[float, ...] = (),
     series_lags_s: tuple[float, ...] = (),
 ) -> Baseline:
-    """M0 (see module docstring): masses on the nodes, then the output lag by least squares on
-    the lagged hysteresis output, then the masses refitted through that lag (one alternation).
+    """M0 (see module docstring): the output lag by profile least squares (the masses refitted
+    through every candidate of ``lags_s``), then the masses through it. With a second-order stage
+    the lag and stage are chosen on the lagged output of a static fit instead (one alternation).
 
     ``series_lags_s`` (empty: off) adds a second first-order lag in series, chosen with the first
     from pairs of the two grids (second <= first, 0 = none) by the same least squares: a valve
@@ -163,15 +180,31 @@ def fit_baseline(
         coef = np.linalg.lstsq(z, y, rcond=None)[0]
         return float(np.sum((z @ coef - y) ** 2))
 
-    # two lags in series are chosen on a static fit's output that lags the wrong way: one more
-    # alternation (choose on the masses refitted through the first choice) finds the pair
-    for _ in range(2 if series_lags_s else 1):
+    if len(stages) == 1:
+        # the lag(s) by profile least squares, the masses refitted through every candidate (on every
+        # k-th row, at most PROFILE_ROWS: the choice, not the fit); choosing on a static fit's output
+        # picks too short a lag (it lags the wrong way: 0.02 s for a 0.05 s lag on a generalised-play
+        # plant, the rest left to the rate and delay tests), and alternating never leaves that choice
+        rows = slice(None, None, -(-y.size // PROFILE_ROWS))
+
+        def profile_error(pair: tuple[float, float]) -> float:
+            lagged = np.hstack([linear_stage(rs, nodes, pair[0], (0.0, 0.0), pair[1]), ones])[rows]
+            coef = ridge_fit(lagged, y[rows], smoothness, ridge)
+            return float(np.sum((lagged @ coef - y[rows]) ** 2))
+
+        lag, second = min(pairs, key=profile_error)
+        resonance = (0.0, 0.0)
+        lagged_nodes = linear_stage(rs, nodes, lag, resonance, second)
+        theta = ridge_fit(np.hstack([lagged_nodes, ones]), y, smoothness, ridge)
+        x = nodes @ theta[:-1]
+    # with a second-order stage the pairs are chosen on the lagged output of the masses (a static
+    # fit's, then once more on the masses refitted through the first choice when two lags are in series)
+    for _ in range(0 if len(stages) == 1 else 2 if series_lags_s else 1):
         lagged_by = {pair: run_lowpass(rs, run_lowpass(rs, x, pair[0]), pair[1]) for pair in pairs}
         (lag, second), resonance = min(((pair, fz) for pair in pairs for fz in stages), key=stage_error)
         lagged_nodes = linear_stage(rs, nodes, lag, resonance, second)
         theta = ridge_fit(np.hstack([lagged_nodes, ones]), y, smoothness, ridge)
         x = nodes @ theta[:-1]
-
     xc = (x - x.mean()) / (np.std(x) or 1.0)
     lagged_x = linear_stage(rs, x, lag, resonance, second)
     columns = [

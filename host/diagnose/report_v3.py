@@ -72,6 +72,11 @@ PLAIN = {
 }
 
 
+def _words(cause: str) -> str:
+    """A cause's name as words (``load_dependence`` -> ``load dependence``)."""
+    return cause.replace("_", " ")
+
+
 def _resolution(d: DiagnosisV3, cause: str) -> float:
     """The smallest p a resampling test can give for ``cause`` (1 / (draws + 1))."""
     draws = d.rules.column_surrogates if CAUSES[cause].kind == "column" else d.rules.bootstrap_draws
@@ -83,6 +88,8 @@ def _role(d: DiagnosisV3, cause: str) -> str:
         return "**named**"
     if cause in d.rejected:
         return "failed held out" if cause in d.trials else "faded with a richer baseline"
+    if cause in {g for g, _ in d.further}:
+        return "also confirmed held out"
     if cause in d.also:
         return "also significant"
     if cause in d.cannot_tell:
@@ -99,8 +106,20 @@ def _meaning(d: DiagnosisV3, units: str) -> str:
             f"was not fitted to from {number(h.base_rmse)} to {number(h.ext_rmse)} {units} RMS "
             f"({h.gain:.0%} less; 90 % interval {h.interval[0]:.0%} to {h.interval[1]:.0%})."
         )
-        if d.also:
-            text += f" Also significant on their own, not yet checked on held-out data: {', '.join(d.also)}."
+        named = [d.cause]
+        for g, hf in d.further:
+            text += (
+                f" Beyond {' and '.join(map(_words, named))}, {PLAIN[g]}: adding it too lowers the held-out error "
+                f"from {number(hf.base_rmse)} to {number(hf.ext_rmse)} {units} RMS ({hf.gain:.0%} less; 90 % "
+                f"interval {hf.interval[0]:.0%} to {hf.interval[1]:.0%}; on the rows this comparison scores)."
+            )
+            named.append(g)
+        unchecked = [g for g in d.also if g not in named]
+        if unchecked:
+            text += (
+                " Also significant on their own, but not confirmed on held-out data beyond "
+                f"{' and '.join(map(_words, named))}: {', '.join(map(_words, unchecked))}."
+            )
         return text + f" To confirm it, record {CAUSES[d.cause].to_record}."
     if d.cannot_tell:
         record = "; ".join(f"{c}: {CAUSES[c].to_record}" for c in d.cannot_tell)

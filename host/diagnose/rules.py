@@ -80,7 +80,9 @@ CAUSES: dict[str, Cause] = {
 class Rules:
     """Every threshold of diagnosis v3 (one object, versioned: ``version`` names it)."""
 
-    version: str = "v3.0"
+    # v3.1 (2026-12-06): the Preisach grid padded beyond the input range, the output lag by profile least
+    # squares, the actuator lag before the hysteresis, further causes confirmed beyond the named one
+    version: str = "v3.1"
     # one family-wise error rate per record over every cause tested (Westfall-Young max-T for the
     # dynamic groups, surrogates for columns, split by Bonferroni between the two)
     alpha: float = 0.05
@@ -107,8 +109,25 @@ class Rules:
     # Everett grid intervals of the rate-independent baseline and of its richer rung (robustness ladder)
     preisach_levels: int = 16
     richer_levels: int = 24
+    # Everett grid intervals added below and above the input's range (host/diagnose/runs.py
+    # preisach_nodes): relays switching outside the range keep their state at its ends, so loops
+    # that do not close there (play, Bouc-Wen, friction elements wider than the excursion) are in the
+    # baseline's class. Runs that start at rest rising (a play on its rising branch): one play
+    # operator of a sixth to a third of the range is fitted to 1.2-2.9 % of its span without it, to
+    # about 0.1 % with it (tests/test_diagnose_preisach_padding.py); runs starting on the falling
+    # branch fit either way. One interval spans what more do (the node matrix's rank is the same).
+    # 0: the grid ends at the range (wiping out there)
+    preisach_pad_levels: int = 1
     # ridge on the Preisach node weights, relative to the mean diagonal of the normal equations
     node_ridge: float = 1e-3
+    # actuator lags before the hysteresis [s] (host/diagnose/actuator.py): the muscle's pressure follows
+    # the recorded command through the valve and chamber (a negative value is the inverse of a lag, a
+    # snubbed pressure reading the muscle leads). Chosen per record by the least squares of the
+    # baseline with every cause's group, 0 among them; v2's grid (host/diagnose/run.py ACTUATOR_LAGS_S)
+    # without its inverse lags: on effect-free synthetic runs they were chosen 5 times in 10 where
+    # no lag acts and named a cause once (0/10 without them); the baseline's input-lead direction
+    # covers a snubber to first order. 0 alone: off
+    input_lags_s: tuple[float, ...] = (0.0, 0.02, 0.05, 0.1, 0.17, 0.25)
     # output lags tried for the baseline's linear dynamics [s]: the rig's mechanics (a first-order lag)
     output_lags_s: tuple[float, ...] = (0.0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0)
     # further output lags [s] whose directions join the nuisance (linear dynamics as a sum of lags)
@@ -176,6 +195,11 @@ class Rules:
     # noise model (innovations; issue 33's "fold RMSEs are not whitened, so a few slow excursions
     # decide folds"); the gain reported stays that of the raw errors
     heldout_whitened: bool = False
+    # after the named cause, the other causes whose unique test passed (not rejected) are tried in
+    # their rank order, each held out beyond the baseline and every cause confirmed before it (nested
+    # Clark-West at alpha and the interval gate, as the first); the first that fails ends the sequence
+    # (fixed-sequence testing). At most this many further causes; 0: off
+    max_further_causes: int = 3
     # a cause whose unique test passes on the full record but fails with the richer baseline is the
     # baseline's class, not a cause, when its statistic falls by more than this share
     ladder_drop: float = 0.5
@@ -206,6 +230,8 @@ _MINIMUM: dict[str, float] = {
     "min_fold_samples": 10,
     "min_samples": 20,
 }
+# fields whose values may be negative (an inverse actuator lag)
+_SIGNED = ("input_lags_s",)
 # fields that are shares or probabilities: at most 1
 _AT_MOST_ONE = ("alpha", "surrogate_screen_p", "ladder_drop")
 
@@ -238,7 +264,7 @@ def _parsed(key: str, raw: str, current: object) -> object:
     numbers = value if isinstance(value, tuple) else (value,)
     if not numbers:
         raise ValueError(f"--rules: {key}={raw} holds no number; give {kind}")
-    low = _MINIMUM.get(key, 0.0)
+    low = -math.inf if key in _SIGNED else _MINIMUM.get(key, 0.0)
     if not all(math.isfinite(v) and v >= low for v in numbers):
         raise ValueError(f"--rules: {key}={raw}: {key} takes finite values of {low:g} or more")
     if key in _AT_MOST_ONE and not 0 < numbers[0] <= 1:
@@ -260,7 +286,7 @@ def _written(value: object) -> str:
 def with_overrides(text: str, rules: Rules = RULES) -> Rules:
     """``rules`` with ``field=value`` overrides, comma-separated: flags as true/false, numbers as
     numbers, tuples of numbers slash-separated (``output_lags_s=0/0.01/0.1``). The version becomes
-    ``v3.0+field=value,...`` in the same form, so a verdict says which rules made it and the text
+    ``v3.1+field=value,...`` in the same form, so a verdict says which rules made it and the text
     can be given to --rules again. Bad input: one ValueError naming the field and what it takes."""
     known = {f.name for f in fields(Rules)} - {"extra", "version"}
     changes: dict[str, Any] = {}

@@ -35,6 +35,9 @@ class RunSet:
     names: list[str]
     columns: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    # ``u`` is the recorded input through this actuator lag [s] (negative: its inverse;
+    # :mod:`host.diagnose.actuator`); 0: as recorded
+    input_lag_s: float = 0.0
 
     @property
     def n_runs(self) -> int:
@@ -151,20 +154,30 @@ def node_differences(levels: int) -> NDArray[np.float64]:
     return d
 
 
-def preisach_nodes(rs: RunSet, levels: int) -> tuple[NDArray[np.float64], list[str]]:
+def preisach_nodes(rs: RunSet, levels: int, pad_levels: int = 0) -> tuple[NDArray[np.float64], list[str]]:
     """Preisach regressor rows (Everett nodes on one grid over every run's input), each run from
     its own first sample: from where the memory is known when the run reaches an end of the
     range before its middle, else with the state assumed (the input rose from the range's minimum;
-    a note says so). Nodes no sample weights are dropped."""
+    a note says so).
+
+    ``pad_levels`` > 0 extends the grid by that many intervals (of the input range over
+    ``levels``) below and above the input's range, ``levels + 2 pad_levels`` in all: relays that
+    switch outside the range keep their state when the input reaches its minimum or maximum, so a
+    loop that does not close at the ends of the range (a play operator, a Bouc-Wen or friction
+    element wider than the excursion) is in the class. The input's extremes then erase nothing,
+    and every run starts as if it had risen from the grid's minimum (a rested muscle)."""
     lo, hi = float(rs.u.min()), float(rs.u.max())
-    grid = EverettGrid(lo, hi, levels)
+    step = (hi - lo) / levels
+    grid = EverettGrid(lo - pad_levels * step, hi + pad_levels * step, levels + 2 * pad_levels)
     rows = np.zeros((rs.u.size, grid.size))
     assumed = 0
     for a, b in rs.bounds():
         u = rs.u[a:b]
         found = memory_start(u)
         at_end = min(abs(float(u[found.index]) - lo), abs(float(u[found.index]) - hi)) <= 0.005 * (hi - lo)
-        if at_end and found.index < (b - a) // 2:
+        if pad_levels:
+            begin = MemoryStart(0, "ascending")
+        elif at_end and found.index < (b - a) // 2:
             begin = found
         else:
             begin, assumed = MemoryStart(0, "ascending"), assumed + 1

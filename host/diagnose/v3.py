@@ -2,14 +2,16 @@
 
 prepare -> baseline -> score -> decide -> explain:
 
-1. prepare: the runs as one :class:`host.diagnose.runs.RunSet` and their Preisach rows;
+1. prepare: the runs as one :class:`host.diagnose.runs.RunSet`, the input through the actuator
+   lag chosen for the record (:mod:`host.diagnose.actuator`), and their Preisach rows;
 2. baseline: M0, the nuisance space that is not an effect (:mod:`host.diagnose.nuisance`);
 3. score: each cause's group tested conditionally on M0, marginal and unique, whitened and
    calibrated per record (:mod:`host.diagnose.conditional`);
 4. decide: a cause is named when its unique test passes at its level (one family-wise alpha per
    record); causes that pass only jointly are "cannot tell X from Y"; a named dynamic cause whose
    statistic collapses with a richer rate-independent baseline is the baseline's class, not a
-   cause (the robustness ladder);
+   cause (the robustness ladder); the named cause must predict held-out data, and further causes
+   are confirmed held out one after another beyond it (:func:`further_causes`);
 5. explain: the held-out gain of the named extension (:mod:`host.diagnose.heldout`) and one
    paragraph of reason.
 
@@ -28,6 +30,7 @@ from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
 from host.data import Measurement
+from host.diagnose.actuator import with_actuator
 from host.diagnose.composite import class_nuisance, null_classes, simulated_records, unrestricted_residual
 from host.diagnose.conditional import GroupTest, column_copies, group_tests, whitened
 from host.diagnose.groups import branch_of, cause_groups, column_group
@@ -62,6 +65,8 @@ class DiagnosisV3:
     trials: dict[str, HeldOut] = field(default_factory=dict)  # every held-out comparison made, in order
     # measured columns confirmed held out, against their copies' held-out gains (rules.column_heldout_surrogates)
     column_heldout: dict[str, HeldOutSurrogates] = field(default_factory=dict)
+    # further causes confirmed held out, each beyond the baseline, the named cause and those before it
+    further: list[tuple[str, HeldOut]] = field(default_factory=list)
 
     @property
     def gain(self) -> float:
@@ -73,6 +78,11 @@ class DiagnosisV3:
             "cause": self.cause,
             "gain": round(self.gain, 4),
             "also": self.also,
+            # each beyond the baseline, the named cause and the causes listed before it
+            "also_confirmed": [
+                {"cause": g, "beyond": [self.cause] + [f for f, _ in self.further[:i]], **h.as_json()}
+                for i, (g, h) in enumerate(self.further)
+            ],
             "cannot_tell": self.cannot_tell,
             "class_mismatch": self.class_mismatch,
             "rejected": self.rejected,
@@ -88,6 +98,7 @@ class DiagnosisV3:
             "holdout": self.holdout,
             "evidence": {g: t.as_json() for g, t in self.tests.items()},
             "baseline": {
+                "input_lag_s": round(self.runset.input_lag_s, 6),
                 "output_lag_s": round(self.baseline.lag_s, 6),
                 "nuisance_columns": self.baseline.nuisance.shape[1],
             },
@@ -108,8 +119,8 @@ def score(
     rs: RunSet, levels: int, rules: Rules, seed: int, say: Callable[[str], None] | None = None
 ) -> tuple[Baseline, dict[str, NDArray[np.float64]], dict[str, GroupTest], list[str]]:
     """Baseline at ``levels`` and every cause's tests; ``say`` gets a progress line between them."""
-    nodes, notes = preisach_nodes(rs, levels)
-    smooth = node_differences(levels)
+    nodes, notes = preisach_nodes(rs, levels, rules.preisach_pad_levels)
+    smooth = node_differences(levels + 2 * rules.preisach_pad_levels)
     base = fit_baseline(
         rs,
         nodes,
@@ -212,12 +223,10 @@ def choose(
     rejected: list[str] = []
     heldout_of: str | None = None
     for candidate in ranked:  # the largest unique share first; the first confirmed is named
-        if CAUSES[candidate].kind == "dynamic" and rules.ladder_drop < 1.0:
-            r = richer_tests()[candidate]
-            if r.unique_p > r.level and r.unique_stat < (1 - rules.ladder_drop) * tests[candidate].unique_stat:
-                class_mismatch = class_mismatch or not rejected
-                rejected.append(candidate)
-                continue
+        if faded(candidate, tests, richer_tests, rules):
+            class_mismatch = class_mismatch or not rejected
+            rejected.append(candidate)
+            continue
         if confirmed(trial(candidate), rules) or not rules.heldout_gate:
             return Choice(candidate, rejected, False, False, candidate)
         if not rejected:
@@ -243,6 +252,40 @@ def confirmed(h: HeldOut, rules: Rules) -> bool:
     """Nested confirmation: the extension predicts rows it was not fitted on (Clark-West p <= alpha,
     and with ``rules.heldout_interval_gate`` the gain's 90 % interval above 0)."""
     return h.clark_west_p <= rules.alpha and (h.interval[0] > 0.0 or not rules.heldout_interval_gate)
+
+
+def faded(
+    cause: str, tests: dict[str, GroupTest], richer_tests: Callable[[], dict[str, GroupTest]], rules: Rules
+) -> bool:
+    """The robustness ladder: a dynamic cause whose unique test fails with the richer baseline, its
+    statistic down by more than ``rules.ladder_drop``, is the baseline's class, not a cause."""
+    if CAUSES[cause].kind != "dynamic" or rules.ladder_drop >= 1.0:
+        return False
+    r = richer_tests()[cause]
+    return r.unique_p > r.level and r.unique_stat < (1 - rules.ladder_drop) * tests[cause].unique_stat
+
+
+def further_causes(
+    named: str,
+    candidates: list[str],
+    trial_beyond: Callable[[str, list[str]], HeldOut],
+    rules: Rules,
+) -> list[tuple[str, HeldOut]]:
+    """The causes of ``candidates`` (in order) confirmed held out one after another, each beyond
+    the baseline, ``named`` and the causes confirmed before it (``trial_beyond(cause, before)``);
+    the first that is not confirmed ends the sequence (fixed-sequence testing at alpha), and at
+    most ``rules.max_further_causes`` are kept."""
+    found: list[tuple[str, HeldOut]] = []
+    if named == "none":
+        return found
+    for g in candidates:
+        if len(found) >= rules.max_further_causes:
+            break
+        h = trial_beyond(g, [named] + [f for f, _ in found])
+        if not confirmed(h, rules):
+            break
+        found.append((g, h))
+    return found
 
 
 def column_heldout_test(
@@ -309,7 +352,9 @@ def diagnose_runs(
     rs = run_set(runs, rules.max_rows, rules.min_samples)
     threads = 1 if rs.y.size < 15_000 else 2
     with threadpool_limits(limits=threads):
-        _say(progress, f"diagnose v3: {rs.n_runs} run(s), {rs.y.size} samples: fitting the baseline ...")
+        _say(progress, f"diagnose v3: {rs.n_runs} run(s), {rs.y.size} samples: choosing the actuator lag ...")
+        rs = with_actuator(rs, rules)
+        _say(progress, "diagnose v3: fitting the baseline ...")
         base, groups, tests, notes = score(
             rs, rules.preisach_levels, rules, seed, (lambda text: _say(progress, text)) if progress else None
         )
@@ -324,14 +369,14 @@ def diagnose_runs(
                 richer.update(richer_rung(rs, rules, seed))
             return richer
 
-        def trial(candidate: str) -> HeldOut:
-            if candidate in trials:
-                return trials[candidate]
-            _say(progress, f"diagnose v3: held-out gain of {candidate} over {len(masks)} folds ...")
+        def trial_beyond(candidate: str, before: list[str]) -> HeldOut:
+            """``candidate``'s held-out comparison beyond the baseline and the causes ``before``."""
+            after = f" beyond {', '.join(before)}" if before else ""
+            _say(progress, f"diagnose v3: held-out gain of {candidate}{after} over {len(masks)} folds ...")
             column = CAUSES[candidate].column
-            trials[candidate] = held_out(
+            return held_out(
                 rs,
-                base.nuisance,
+                np.hstack([base.nuisance, *(groups[g] for g in before)]),
                 base.smoothness,
                 groups[candidate],
                 masks,
@@ -340,7 +385,12 @@ def diagnose_runs(
                 rs.columns.get(column) if column else None,
                 cluster_labels(rs, rules),
                 whitener,
+                [groups[g].shape[1] for g in before],
             )
+
+        def trial(candidate: str) -> HeldOut:
+            if candidate not in trials:
+                trials[candidate] = trial_beyond(candidate, [])
             return trials[candidate]
 
         ranked, cannot_tell = decide(tests, rules)
@@ -366,7 +416,10 @@ def diagnose_runs(
             choice.rejected,
         )
         result_heldout = trials.get(choice.heldout_of) if choice.heldout_of else None
-    also = [g for g in ranked if g != cause and g not in rejected] if cause != "none" else []
+        also = [g for g in ranked if g != cause and g not in rejected] if cause != "none" else []
+        further = further_causes(
+            cause, [g for g in also if not faded(g, tests, richer_tests, rules)], trial_beyond, rules
+        )
     first = rejected[0] if rejected else "none"
     out = DiagnosisV3(
         cause,
@@ -386,6 +439,7 @@ def diagnose_runs(
         rejected=rejected,
         trials=trials,
         column_heldout=column_heldout,
+        further=further,
     )
     out.reason = explain(out, first)
     out.seconds, out.cpu_seconds = time.perf_counter() - wall, time.process_time() - cpu
@@ -419,11 +473,18 @@ def explain(d: DiagnosisV3, tested: str) -> str:
             if hv
             else ""
         )
-        checked = [g for g in d.also if g in d.trials and confirmed(d.trials[g], d.rules)]
-        unchecked = [g for g in d.also if g not in checked]
-        also = f"; also confirmed held out: {', '.join(checked)}" if checked else ""
+        also = "".join(
+            f"; beyond it{' and ' + ', '.join(f for f, _ in d.further[:i]) if i else ''}, {g} also predicts "
+            f"held-out data better ({h.gain:.1%}, 90 % interval {h.interval[0]:.1%} to {h.interval[1]:.1%}; "
+            f"Clark-West p = {h.clark_west_p:.2g})"
+            for i, (g, h) in enumerate(d.further)
+        )
+        confirmed_too = {g for g, _ in d.further}
+        unchecked = [g for g in d.also if g not in confirmed_too]
         if unchecked:
-            also += f"; also significant on its own (not checked held out): {', '.join(unchecked)}"
+            also += "; also significant on its own (not confirmed held out beyond the named causes): " + ", ".join(
+                unchecked
+            )
         if d.rejected:
             also += f"; passed on the record but failed held out or with a richer baseline: {', '.join(d.rejected)}"
         if d.cause in d.column_heldout:

@@ -1,0 +1,76 @@
+"""The actuator before the hysteresis: what drives the muscle is the recorded input through a lag.
+
+A pneumatic muscle's pressure follows the recorded command through the valve and the chamber (a
+first-order lag), or the recorded pressure is read through a snubber or filter of its own so that
+the muscle leads it (the inverse of a lag). Either acts *before* the hysteresis, where an output
+lag cannot stand in for it: a lag before a hysteresis widens the loop with the input's speed,
+which the rate group would otherwise take for its own. The lag is part of the rig, not an effect:
+it is chosen per record from :attr:`host.diagnose.rules.Rules.input_lags_s` (0 among them) by
+the least squares of the baseline *and every cause's group* (chosen under the alternative, so an
+effect cannot pull it), before any cause is tested, and everything after works on the
+actuator's output.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from host.diagnose.features import actuator_input
+from host.diagnose.groups import cause_groups
+from host.diagnose.nuisance import PROFILE_ROWS, fit_baseline, ridge_fit
+from host.diagnose.rules import Rules
+from host.diagnose.runs import RunSet, node_differences, preisach_nodes
+
+
+def usable_lags(rs: RunSet, rules: Rules) -> list[float]:
+    """The lags of ``rules.input_lags_s`` [s] this sampling can show (at least half a sample either
+    way, as the output lags); 0 always."""
+    return sorted({0.0, *(lag for lag in rules.input_lags_s if abs(lag) >= 0.5 * rs.dt)})
+
+
+def driven(rs: RunSet, lag_s: float) -> RunSet:
+    """``rs`` with its input through the actuator lag ``lag_s`` [s] (negative: the inverse of a lag),
+    each run from its own first sample."""
+    if lag_s == 0:
+        return rs
+    u = np.empty_like(rs.u)
+    for a, b in rs.bounds():
+        u[a:b] = actuator_input(rs.u[a:b], rs.dt, lag_s)
+    return replace(rs, u=u, input_lag_s=lag_s)
+
+
+def unrestricted_error(rs: RunSet, rules: Rules) -> float:
+    """Sum of squared errors [units of y squared] of the baseline M0 fitted on ``rs`` together
+    with every cause's group: the actuator is chosen under the alternative, so an effect the
+    baseline lacks cannot pull the lag towards whatever mimics it."""
+    nodes, _ = preisach_nodes(rs, rules.preisach_levels, rules.preisach_pad_levels)
+    smooth = node_differences(rules.preisach_levels + 2 * rules.preisach_pad_levels)
+    base = fit_baseline(rs, nodes, smooth.T @ smooth, rules.output_lags_s, rules.node_ridge, rules.nuisance_lags_s)
+    groups = cause_groups(rs, base, rules)
+    rows = slice(None, None, -(-rs.y.size // PROFILE_ROWS))  # the choice, not the fit: every k-th row
+    design = np.hstack([base.nuisance, *groups.values()])[rows]
+    widths = [g.shape[1] for g in groups.values()]
+    fitted = design @ ridge_fit(design, rs.y[rows], base.smoothness, rules.node_ridge, widths)
+    return float(np.sum((rs.y[rows] - fitted) ** 2))
+
+
+def with_actuator(rs: RunSet, rules: Rules) -> RunSet:
+    """``rs`` driven through the actuator lag whose baseline fits best (:func:`driven`), with a note
+    when it is not 0."""
+    lags = usable_lags(rs, rules)
+    if len(lags) == 1:
+        return rs
+    errors = {lag: unrestricted_error(driven(rs, lag), rules) for lag in lags}
+    best = min(errors, key=errors.__getitem__)
+    if best == 0:
+        return rs
+    kind = "a lag of" if best > 0 else "the inverse of a lag of"
+    note = (
+        f"the hysteresis is driven by the input through {kind} {abs(best) * 1000:.0f} ms (the actuator, chosen "
+        f"by least squares with every cause's terms from {len(lags)} lags, 0 among them); the causes are tested "
+        "beyond it"
+    )
+    out = driven(rs, best)
+    return replace(out, notes=[*out.notes, note])
