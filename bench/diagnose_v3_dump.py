@@ -49,7 +49,6 @@ from host.diagnose.conditional import (  # noqa: E402
 from host.diagnose.heldout import (  # noqa: E402
     HeldOut,
     cluster_labels,
-    held_out,
     held_out_statistics,
     holdout_folds,
     scoring_name,
@@ -64,6 +63,7 @@ from host.diagnose.v3 import (  # noqa: E402
     decide,
     faded,
     further_causes,
+    held_out_beyond,
     richer_rung,
     score,
     with_columns,
@@ -110,17 +110,7 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
     ar = ar_whitener(rs.y - base.prediction, rules.max_ar_order)
     trials, variants = {}, {}
     for g in groups:
-        column = CAUSES[g].column
-        h = held_out(
-            rs,
-            base.nuisance,
-            base.smoothness,
-            groups[g],
-            masks,
-            rules.node_ridge,
-            np.random.default_rng(seed),
-            rs.columns.get(column) if column else None,
-        )
+        h = held_out_beyond(rs, base, groups, g, [], masks, rules, seed, None, None)
         assert h.scored is not None
         for clustered in (False, True):
             for white in (False, True):
@@ -153,20 +143,7 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
     whitener = ar if rules.heldout_whitened else None
 
     def trial_beyond(candidate: str, before: list[str]) -> HeldOut:
-        column = CAUSES[candidate].column
-        return held_out(
-            rs,
-            np.hstack([base.nuisance, *(groups[g] for g in before)]),
-            base.smoothness,
-            groups[candidate],
-            masks,
-            rules.node_ridge,
-            np.random.default_rng(seed),
-            rs.columns.get(column) if column else None,
-            clusters,
-            whitener,
-            [groups[g].shape[1] for g in before],
-        )
+        return held_out_beyond(rs, base, groups, candidate, before, masks, rules, seed, clusters, whitener)
 
     also = [g for g in ranked if g != choice.cause and g not in choice.rejected]
     further = further_causes(

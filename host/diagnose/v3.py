@@ -254,6 +254,36 @@ def confirmed(h: HeldOut, rules: Rules) -> bool:
     return h.clark_west_p <= rules.alpha and (h.interval[0] > 0.0 or not rules.heldout_interval_gate)
 
 
+def held_out_beyond(
+    rs: RunSet,
+    base: Baseline,
+    groups: dict[str, NDArray[np.float64]],
+    candidate: str,
+    before: list[str],
+    masks: list[NDArray[np.bool_]],
+    rules: Rules,
+    seed: int,
+    clusters: NDArray[np.int64] | None,
+    whitener: NDArray[np.float64] | None,
+) -> HeldOut:
+    """``candidate``'s held-out comparison (:func:`host.diagnose.heldout.held_out`) beyond the
+    baseline and the causes ``before`` (their groups join the nuisance, each keeping its ridge)."""
+    column = CAUSES[candidate].column
+    return held_out(
+        rs,
+        np.hstack([base.nuisance, *(groups[g] for g in before)]),
+        base.smoothness,
+        groups[candidate],
+        masks,
+        rules.node_ridge,
+        np.random.default_rng(seed),
+        rs.columns.get(column) if column else None,
+        clusters,
+        whitener,
+        [groups[g].shape[1] for g in before],
+    )
+
+
 def faded(
     cause: str, tests: dict[str, GroupTest], richer_tests: Callable[[], dict[str, GroupTest]], rules: Rules
 ) -> bool:
@@ -370,22 +400,10 @@ def diagnose_runs(
             return richer
 
         def trial_beyond(candidate: str, before: list[str]) -> HeldOut:
-            """``candidate``'s held-out comparison beyond the baseline and the causes ``before``."""
             after = f" beyond {', '.join(before)}" if before else ""
             _say(progress, f"diagnose v3: held-out gain of {candidate}{after} over {len(masks)} folds ...")
-            column = CAUSES[candidate].column
-            return held_out(
-                rs,
-                np.hstack([base.nuisance, *(groups[g] for g in before)]),
-                base.smoothness,
-                groups[candidate],
-                masks,
-                rules.node_ridge,
-                np.random.default_rng(seed),
-                rs.columns.get(column) if column else None,
-                cluster_labels(rs, rules),
-                whitener,
-                [groups[g].shape[1] for g in before],
+            return held_out_beyond(
+                rs, base, groups, candidate, before, masks, rules, seed, cluster_labels(rs, rules), whitener
             )
 
         def trial(candidate: str) -> HeldOut:
