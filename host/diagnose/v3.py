@@ -62,7 +62,8 @@ class DiagnosisV3:
     rejected: list[str] = field(default_factory=list)  # passed on the record, failed the ladder or held out
     seconds: float = 0.0
     cpu_seconds: float = 0.0
-    trials: dict[str, HeldOut] = field(default_factory=dict)  # every held-out comparison made, in order
+    # every held-out comparison beyond the baseline alone, in order (further causes are in ``further``)
+    trials: dict[str, HeldOut] = field(default_factory=dict)
     # measured columns confirmed held out, against their copies' held-out gains (rules.column_heldout_surrogates)
     column_heldout: dict[str, HeldOutSurrogates] = field(default_factory=dict)
     # further causes confirmed held out, each beyond the baseline, the named cause and those before it
