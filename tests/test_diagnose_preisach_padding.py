@@ -20,7 +20,7 @@ from edge.hysteresis.pi import play_outputs
 from host.data import Measurement
 from host.diagnose.nuisance import fit_baseline
 from host.diagnose.rules import RULES, Rules
-from host.diagnose.runs import node_differences, preisach_nodes, run_set
+from host.diagnose.runs import preisach_basis, run_set
 from tests.test_diagnose_v3 import RATE_HZ, cycle_run
 
 
@@ -41,9 +41,8 @@ def play_runs(threshold: float, seed: int = 4, n_runs: int = 12) -> list[Measure
 
 def baseline_rms_over_span(runs: list[Measurement], rules: Rules) -> float:
     rs = run_set(runs, rules.max_rows, rules.min_samples)
-    nodes, _ = preisach_nodes(rs, rules.preisach_levels, rules.preisach_pad_levels)
-    d = node_differences(rules.preisach_levels + 2 * rules.preisach_pad_levels)
-    base = fit_baseline(rs, nodes, d.T @ d, rules.output_lags_s, rules.node_ridge, rules.nuisance_lags_s)
+    nodes, smoothness, _ = preisach_basis(rs, rules.preisach_levels, rules.preisach_pad_levels)
+    base = fit_baseline(rs, nodes, smoothness, rules.output_lags_s, rules.node_ridge, rules.nuisance_lags_s)
     return float(np.sqrt(np.mean((rs.y - base.prediction) ** 2)) / np.ptp(rs.y))
 
 

@@ -22,7 +22,7 @@ from host.diagnose.features import actuator_input
 from host.diagnose.groups import cause_groups
 from host.diagnose.nuisance import PROFILE_ROWS, fit_baseline, ridge_fit
 from host.diagnose.rules import Rules
-from host.diagnose.runs import RunSet, node_differences, preisach_nodes
+from host.diagnose.runs import RunSet, preisach_basis
 
 
 def usable_lags(rs: RunSet, rules: Rules) -> list[float]:
@@ -47,9 +47,8 @@ def unrestricted_error(rs: RunSet, rules: Rules) -> float:
     with every cause's group: the actuator is chosen under the alternative, so an effect the
     baseline lacks pulls the lag less than a choice on M0 alone (which chose 0.1 s on synthetic
     creep campaigns where no lag acts); it can still move it."""
-    nodes, _ = preisach_nodes(rs, rules.preisach_levels, rules.preisach_pad_levels)
-    smooth = node_differences(rules.preisach_levels + 2 * rules.preisach_pad_levels)
-    base = fit_baseline(rs, nodes, smooth.T @ smooth, rules.output_lags_s, rules.node_ridge, rules.nuisance_lags_s)
+    nodes, smoothness, _ = preisach_basis(rs, rules.preisach_levels, rules.preisach_pad_levels)
+    base = fit_baseline(rs, nodes, smoothness, rules.output_lags_s, rules.node_ridge, rules.nuisance_lags_s)
     groups = cause_groups(rs, base, rules)
     rows = slice(None, None, -(-rs.y.size // PROFILE_ROWS))  # the choice, not the fit: every k-th row
     design = np.hstack([base.nuisance, *groups.values()])[rows]

@@ -33,7 +33,7 @@ from scipy.signal import lfilter
 from edge.hysteresis.pi import play_outputs
 from host.diagnose.nuisance import Baseline, ar_whitener, ridge_fit, run_lowpass, whiten
 from host.diagnose.rules import Rules
-from host.diagnose.runs import RunSet, node_differences, preisach_nodes
+from host.diagnose.runs import RunSet, preisach_basis
 
 Matrix = NDArray[np.float64]
 
@@ -119,10 +119,9 @@ def bouc_wen(rs: RunSet, lag_s: float) -> NDArray[np.float64]:
 
 def null_classes(rs: RunSet, base: Baseline, rules: Rules) -> list[NullClass]:
     """The effect-free classes of the composite null, fitted to the record."""
-    nodes, _ = preisach_nodes(rs, rules.richer_levels, rules.preisach_pad_levels)
-    smooth = node_differences(rules.richer_levels + 2 * rules.preisach_pad_levels)
+    nodes, smoothness, _ = preisach_basis(rs, rules.richer_levels, rules.preisach_pad_levels)
     lagged = np.column_stack([run_lowpass(rs, nodes, base.lag_s), np.ones(rs.y.size)])
-    richer = lagged @ ridge_fit(lagged, rs.y, smooth.T @ smooth, rules.node_ridge)
+    richer = lagged @ ridge_fit(lagged, rs.y, smoothness, rules.node_ridge)
     fits = {
         "preisach_24": richer,
         "generalised_pi": generalised_pi(rs, base.lag_s),
@@ -172,10 +171,9 @@ def class_nuisance(rs: RunSet, base: Baseline, rules: Rules) -> Matrix:
     plays = pi_plays(rs)
     bw_core, bw_fit = bouc_wen_core(rs, lag)
     pi_fit = _cubic_map(rs, plays, lag)
-    nodes, _ = preisach_nodes(rs, rules.richer_levels, rules.preisach_pad_levels)
-    smooth = node_differences(rules.richer_levels + 2 * rules.preisach_pad_levels)
+    nodes, smoothness, _ = preisach_basis(rs, rules.richer_levels, rules.preisach_pad_levels)
     lagged = np.column_stack([run_lowpass(rs, nodes, lag), np.ones(rs.y.size)])
-    richer = lagged @ ridge_fit(lagged, rs.y, smooth.T @ smooth, rules.node_ridge)
+    richer = lagged @ ridge_fit(lagged, rs.y, smoothness, rules.node_ridge)
     columns = [run_lowpass(rs, plays, lag), run_lowpass(rs, bw_core, lag)]
     longer = 0.5 * lag + rs.dt
     for fit in (pi_fit, bw_fit, richer):

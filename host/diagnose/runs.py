@@ -154,6 +154,25 @@ def node_differences(levels: int) -> NDArray[np.float64]:
     return d
 
 
+def _known_start(u: NDArray[np.float64], lo: float, hi: float) -> MemoryStart | None:
+    """Where a run's memory is known on a grid ending at [``lo``, ``hi``]: its first visit to an end
+    of the range when that comes before its middle, else None (unknown)."""
+    found = memory_start(u)
+    at_end = min(abs(float(u[found.index]) - lo), abs(float(u[found.index]) - hi)) <= 0.005 * (hi - lo)
+    return found if at_end and found.index < u.size // 2 else None
+
+
+def preisach_basis(
+    rs: RunSet, levels: int, pad_levels: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], list[str]]:
+    """(nodes, smoothness, notes): :func:`preisach_nodes` on ``levels`` intervals padded by
+    ``pad_levels`` each side, and the first-difference penalty D^T D of that same grid
+    (:func:`node_differences`), so the two always describe one grid."""
+    nodes, notes = preisach_nodes(rs, levels, pad_levels)
+    d = node_differences(levels + 2 * pad_levels)
+    return nodes, d.T @ d, notes
+
+
 def preisach_nodes(rs: RunSet, levels: int, pad_levels: int = 0) -> tuple[NDArray[np.float64], list[str]]:
     """Preisach regressor rows (Everett nodes on one grid over every run's input), each run from
     its own first sample: from where the memory is known when the run reaches an end of the
@@ -173,14 +192,9 @@ def preisach_nodes(rs: RunSet, levels: int, pad_levels: int = 0) -> tuple[NDArra
     assumed = 0
     for a, b in rs.bounds():
         u = rs.u[a:b]
-        found = memory_start(u)
-        at_end = min(abs(float(u[found.index]) - lo), abs(float(u[found.index]) - hi)) <= 0.005 * (hi - lo)
-        if pad_levels:
-            begin = MemoryStart(0, "ascending")
-        elif at_end and found.index < (b - a) // 2:
-            begin = found
-        else:
-            begin, assumed = MemoryStart(0, "ascending"), assumed + 1
+        known = None if pad_levels else _known_start(u, lo, hi)
+        assumed += not pad_levels and known is None
+        begin = known or MemoryStart(0, "ascending")  # unknown or padded: risen from the grid's minimum
         block_rows = np.zeros((b - a, grid.size))
         offset = begin.index
         for block in regressor_chunks(u, grid, begin, capacity=128):

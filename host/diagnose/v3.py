@@ -38,7 +38,7 @@ from host.diagnose.heldout import HeldOut, cluster_labels, held_out, holdout_fol
 from host.diagnose.heldout_surrogates import HeldOutSurrogates, held_out_surrogates
 from host.diagnose.nuisance import Baseline, ar_whitener, fit_baseline, with_nuisance
 from host.diagnose.rules import CAUSES, RULES, Rules
-from host.diagnose.runs import RunSet, node_differences, preisach_nodes, run_set
+from host.diagnose.runs import RunSet, preisach_basis, run_set
 
 
 @dataclass
@@ -120,12 +120,11 @@ def score(
     rs: RunSet, levels: int, rules: Rules, seed: int, say: Callable[[str], None] | None = None
 ) -> tuple[Baseline, dict[str, NDArray[np.float64]], dict[str, GroupTest], list[str]]:
     """Baseline at ``levels`` and every cause's tests; ``say`` gets a progress line between them."""
-    nodes, notes = preisach_nodes(rs, levels, rules.preisach_pad_levels)
-    smooth = node_differences(levels + 2 * rules.preisach_pad_levels)
+    nodes, smoothness, notes = preisach_basis(rs, levels, rules.preisach_pad_levels)
     base = fit_baseline(
         rs,
         nodes,
-        smooth.T @ smooth,
+        smoothness,
         rules.output_lags_s,
         rules.node_ridge,
         rules.nuisance_lags_s,
