@@ -5,10 +5,10 @@ range, smoothness-regularised; :func:`host.diagnose.runs.preisach_nodes`) after 
 first-order output lag acts (the rig's mechanics, its time constant chosen from
 :attr:`host.diagnose.rules.Rules.output_lags_s` by profile least squares), plus the directions
 in which M0's own settings could move it: the lag's tangent, an input lead (a snubber on the
-pressure reading),
-a static output map (the square and cube of the hysteresis output). Nothing in it depends on
-the input's speed, on time, or on a measured column, so a timing or column effect keeps its own
-part. The AR model of M0's residual (order by BIC) whitens every statistic.
+pressure reading), a static output map (the square and cube of the hysteresis output). Nothing
+in it depends on the input's speed, on time, or on a measured column, so a timing or column
+effect keeps its own part (an actuator lag, :mod:`host.diagnose.actuator`, acts on the input
+before it). The AR model of M0's residual (order by BIC) whitens every statistic.
 """
 
 from __future__ import annotations
@@ -165,9 +165,6 @@ def fit_baseline(
     longer second lag) joins the nuisance."""
     y = rs.y
     ones = np.ones((y.size, 1))
-    theta = ridge_fit(np.hstack([nodes, ones]), y, smoothness, ridge)
-    x = nodes @ theta[:-1]
-
     usable = [tau for tau in lags_s if tau == 0 or tau >= 0.5 * rs.dt]
     # the lag and the second-order stage are chosen together (a lag alone would stand in for a
     # resonance and leave the stage a wrong one)
@@ -175,10 +172,13 @@ def fit_baseline(
     seconds = [0.0] + [tau for tau in series_lags_s if tau >= 0.5 * rs.dt]
     pairs = [(tau, tau2) for tau in usable for tau2 in seconds if tau2 == 0 or 0 < tau2 <= tau]
 
-    def stage_error(choice: tuple[tuple[float, float], tuple[float, float]]) -> float:
-        z = np.column_stack([run_resonance(rs, lagged_by[choice[0]], *choice[1]), ones])
-        coef = np.linalg.lstsq(z, y, rcond=None)[0]
-        return float(np.sum((z @ coef - y) ** 2))
+    def masses_through(
+        pair: tuple[float, float], resonance: tuple[float, float]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(lagged nodes, hysteresis output x) with the masses fitted through these dynamics."""
+        lagged = linear_stage(rs, nodes, pair[0], resonance, pair[1])
+        theta = ridge_fit(np.hstack([lagged, ones]), y, smoothness, ridge)
+        return lagged, nodes @ theta[:-1]
 
     if len(stages) == 1:
         # the lag(s) by profile least squares, the masses refitted through every candidate (on every
@@ -192,19 +192,25 @@ def fit_baseline(
             coef = ridge_fit(lagged, y[rows], smoothness, ridge)
             return float(np.sum((lagged @ coef - y[rows]) ** 2))
 
-        lag, second = min(pairs, key=profile_error)
-        resonance = (0.0, 0.0)
-        lagged_nodes = linear_stage(rs, nodes, lag, resonance, second)
-        theta = ridge_fit(np.hstack([lagged_nodes, ones]), y, smoothness, ridge)
+        (lag, second), resonance = min(pairs, key=profile_error), (0.0, 0.0)
+    else:
+        # with a second-order stage the pairs are chosen on the lagged output of the masses: a
+        # static fit's, then once more on the masses refitted through the first choice when two lags
+        # are in series
+
+        def stage_error(choice: tuple[tuple[float, float], tuple[float, float]]) -> float:
+            z = np.column_stack([run_resonance(rs, lagged_by[choice[0]], *choice[1]), ones])
+            coef = np.linalg.lstsq(z, y, rcond=None)[0]
+            return float(np.sum((z @ coef - y) ** 2))
+
+        theta = ridge_fit(np.hstack([nodes, ones]), y, smoothness, ridge)
         x = nodes @ theta[:-1]
-    # with a second-order stage the pairs are chosen on the lagged output of the masses (a static
-    # fit's, then once more on the masses refitted through the first choice when two lags are in series)
-    for _ in range(0 if len(stages) == 1 else 2 if series_lags_s else 1):
-        lagged_by = {pair: run_lowpass(rs, run_lowpass(rs, x, pair[0]), pair[1]) for pair in pairs}
-        (lag, second), resonance = min(((pair, fz) for pair in pairs for fz in stages), key=stage_error)
-        lagged_nodes = linear_stage(rs, nodes, lag, resonance, second)
-        theta = ridge_fit(np.hstack([lagged_nodes, ones]), y, smoothness, ridge)
-        x = nodes @ theta[:-1]
+        for step in range(2 if series_lags_s else 1):
+            if step:
+                x = masses_through((lag, second), resonance)[1]
+            lagged_by = {pair: run_lowpass(rs, run_lowpass(rs, x, pair[0]), pair[1]) for pair in pairs}
+            (lag, second), resonance = min(((pair, fz) for pair in pairs for fz in stages), key=stage_error)
+    lagged_nodes, x = masses_through((lag, second), resonance)
     xc = (x - x.mean()) / (np.std(x) or 1.0)
     lagged_x = linear_stage(rs, x, lag, resonance, second)
     columns = [
