@@ -64,6 +64,7 @@ from host.diagnose.v3 import (  # noqa: E402
     faded,
     further_causes,
     held_out_beyond,
+    passing_columns,
     richer_rung,
     score,
     with_columns,
@@ -129,9 +130,8 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
                     trials[g] = variant
     # every column's held-out surrogate test, confirmed or not: the replay applies the gates
     surrogates = {g: column_heldout_test(rs, base, groups, g, masks, rules, seed) for g in groups if CAUSES[g].column}
-    passers = sorted(
-        (g for g, r in surrogates.items() if r.p <= tests[g].level and confirmed(trials[g], rules)),
-        key=lambda g: -surrogates[g].gain,
+    passers = passing_columns(
+        {g: (r.p, r.gain) for g, r in surrogates.items()}, tests, lambda g: confirmed(trials[g], rules)
     )
     ranked, cannot_tell = decide(tests, rules)
     choice = choose(ranked, tests, lambda: richer, trials.__getitem__, rules)

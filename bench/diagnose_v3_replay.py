@@ -20,7 +20,7 @@ import numpy as np
 from host.diagnose.conditional import GroupTest
 from host.diagnose.heldout import HeldOut, scoring_name
 from host.diagnose.rules import CAUSES, Rules
-from host.diagnose.v3 import choose, confirmed, decide, with_columns
+from host.diagnose.v3 import choose, confirmed, decide, passing_columns, with_columns
 
 Line = dict[str, Any]
 _EMPTY = np.zeros(0)
@@ -88,8 +88,8 @@ def _column_passers(row: Line, tests: dict[str, GroupTest], rules: Rules) -> lis
     found = row.get("heldout_surrogates")
     if found is None:
         raise SystemExit("this dump has no held-out surrogate results: dump it again with bench/diagnose_v3_dump.py")
-    passed = [g for g, r in found.items() if r["p"] <= tests[g].level and confirmed(_trial(row, g, rules), rules)]
-    return sorted(passed, key=lambda g: -found[g]["gain"])
+    results = {g: (r["p"], r["gain"]) for g, r in found.items()}
+    return passing_columns(results, tests, lambda g: confirmed(_trial(row, g, rules), rules))
 
 
 @dataclass

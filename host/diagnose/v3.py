@@ -370,8 +370,20 @@ def column_passers(
             continue
         say(f"diagnose v3: held-out gain of {g} against {rules.column_surrogates} copies of its column ...")
         found[g] = column_heldout_test(rs, base, groups, g, masks, rules, seed)
-    passed = sorted((g for g, r in found.items() if r.p <= tests[g].level), key=lambda g: -found[g].gain)
+    passed = passing_columns({g: (r.p, r.gain) for g, r in found.items()}, tests, lambda g: True)
     return passed, found
+
+
+def passing_columns(
+    results: dict[str, tuple[float, float]],
+    tests: dict[str, GroupTest],
+    confirmed_held_out: Callable[[str], bool],
+) -> list[str]:
+    """The columns whose held-out surrogate p (``results``: column cause -> (p, held-out gain)) is
+    at the column's level and that are confirmed held out, the largest gain first: the rule
+    :func:`column_passers` applies live and the dump and replay apply to stored results."""
+    passed = [g for g, (p, _) in results.items() if p <= tests[g].level and confirmed_held_out(g)]
+    return sorted(passed, key=lambda g: -results[g][1])
 
 
 def diagnose_runs(
