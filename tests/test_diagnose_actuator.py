@@ -19,7 +19,7 @@ from host.diagnose.nuisance import lowpass
 from host.diagnose.rules import RULES
 from host.diagnose.runs import run_set
 from host.diagnose.v3 import diagnose_runs
-from tests.test_diagnose_v3 import RATE_HZ, cycle_run, noisy, pi_core
+from tests.test_diagnose_v3 import RATE_HZ, noisy, pi_core, rested_cycle
 
 SEEDS = (3, 4, 5, 6, 7, 8)
 
@@ -30,9 +30,7 @@ def valve_runs(seed: int, valve_s: float, n_runs: int = 12) -> list[Measurement]
     rng = np.random.default_rng(seed)
     runs = []
     for i in range(n_runs):
-        _, u = cycle_run(seed + i, rng.uniform(2.0, 7.0), rng.uniform(4.0, 6.0))
-        u = np.r_[np.zeros(8), u]
-        t = np.arange(u.size) / RATE_HZ
+        t, u = rested_cycle(seed + i, rng, seconds=(2.0, 7.0))
         x = pi_core(lowpass(u, 1 / RATE_HZ, valve_s), seed)
         runs.append(Measurement(t, u, noisy(lowpass(x, 1 / RATE_HZ, 0.05), rng), {}, f"run{i:02d}.csv"))
     return runs

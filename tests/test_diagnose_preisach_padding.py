@@ -21,7 +21,7 @@ from host.data import Measurement
 from host.diagnose.nuisance import fit_baseline
 from host.diagnose.rules import RULES, Rules
 from host.diagnose.runs import preisach_basis, run_set
-from tests.test_diagnose_v3 import RATE_HZ, cycle_run
+from tests.test_diagnose_v3 import RATE_HZ, cycle_run, rested_cycle
 
 
 def play_runs(threshold: float, seed: int = 4, n_runs: int = 12) -> list[Measurement]:
@@ -30,9 +30,7 @@ def play_runs(threshold: float, seed: int = 4, n_runs: int = 12) -> list[Measure
     rng = np.random.default_rng(seed)
     runs = []
     for i in range(n_runs):
-        _, u = cycle_run(seed + i, rng.uniform(2.0, 7.0), rng.uniform(4.0, 6.0))
-        u = np.r_[np.zeros(8), u]
-        t = np.arange(u.size) / RATE_HZ
+        t, u = rested_cycle(seed + i, rng, seconds=(2.0, 7.0))
         play = play_outputs(u, np.array([threshold]), np.array([u[0] - threshold]))[:, 0]
         y = 10.0 * play + rng.normal(0.0, 0.02, u.size)
         runs.append(Measurement(t, u, y, {}, f"run{i:02d}.csv"))

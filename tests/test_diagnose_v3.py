@@ -45,6 +45,16 @@ def cycle_run(seed: int, seconds: float, peak: float) -> tuple[np.ndarray, np.nd
     return t, u
 
 
+def rested_cycle(
+    seed: int, rng: np.random.Generator, seconds: tuple[float, float] = (4.0, 7.0)
+) -> tuple[np.ndarray, np.ndarray]:
+    """(t [s], u [bar]) of one run: a cycle of a duration drawn from ``seconds`` and a peak of 4-6 bar
+    (two draws from ``rng``), after 8 samples at rest."""
+    _, u = cycle_run(seed, rng.uniform(*seconds), rng.uniform(4.0, 6.0))
+    u = np.r_[np.zeros(8), u]
+    return np.arange(u.size) / RATE_HZ, u
+
+
 def noisy(y: np.ndarray, rng: np.random.Generator, sd: float = 0.02) -> np.ndarray:
     e = rng.normal(0.0, sd, y.size)
     for k in range(1, y.size):
@@ -60,9 +70,7 @@ def runs_of(seed: int, n_runs: int, effect: str, size: float = 1.0) -> list[Meas
     runs = []
     loads = rng.permutation(np.linspace(0.0, 2.0, n_runs))
     for i in range(n_runs):
-        t, u = cycle_run(seed + i, rng.uniform(4.0, 7.0), rng.uniform(4.0, 6.0))
-        u = np.r_[np.zeros(8), u]
-        t = np.arange(u.size) / RATE_HZ
+        t, u = rested_cycle(seed + i, rng)
         x = pi_core(u, seed)
         if "creep" in effect.split("+"):
             x = x + size * 0.3 * (lowpass(x, 1 / RATE_HZ, 2.0) - x)
