@@ -156,7 +156,7 @@ def _unit_effects(
 
 
 def _smoothed(t: Array, y: Array) -> Array:
-    """``y`` smoothed over :data:`ORACLE_SMOOTHING_S` (cubic Savitzky-Golay on the run's mean step)."""
+    """``y`` smoothed over :data:`ORACLE_SMOOTHING_S` (cubic Savitzky-Golay over the run's median step)."""
     from scipy.signal import savgol_filter
 
     step = float(np.median(np.diff(t))) if t.size > 1 else 1.0
