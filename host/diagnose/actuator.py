@@ -57,6 +57,27 @@ def unrestricted_error(rs: RunSet, rules: Rules) -> float:
     return float(np.sum((rs.y[rows] - fitted) ** 2))
 
 
+def fill_vent_lagged(u: np.ndarray, dt: float, fill_s: float, vent_s: float) -> np.ndarray:
+    """``u`` through a first-order lag of ``fill_s`` [s] while the output rises towards it and
+    ``vent_s`` while it falls (a valve that fills and exhausts through different paths)."""
+    a_fill = 1.0 - np.exp(-dt / fill_s) if fill_s > 0 else 1.0
+    a_vent = 1.0 - np.exp(-dt / vent_s) if vent_s > 0 else 1.0
+    out = np.empty_like(u)
+    p = float(u[0])
+    for i, v in enumerate(u.tolist()):
+        p += (a_fill if v > p else a_vent) * (v - p)
+        out[i] = p
+    return out
+
+
+def driven_asymmetric(rs: RunSet, fill_s: float, vent_s: float) -> RunSet:
+    """``rs`` with its input through :func:`fill_vent_lagged`, each run from its own first sample."""
+    u = np.empty_like(rs.u)
+    for a, b in rs.bounds():
+        u[a:b] = fill_vent_lagged(rs.u[a:b], rs.dt, fill_s, vent_s)
+    return replace(rs, u=u, input_lag_s=fill_s)
+
+
 def with_actuator(rs: RunSet, rules: Rules) -> RunSet:
     """``rs`` driven through the actuator lag whose baseline fits best (:func:`driven`), with a note
     when it is not 0."""
@@ -65,6 +86,18 @@ def with_actuator(rs: RunSet, rules: Rules) -> RunSet:
         return rs
     errors = {lag: unrestricted_error(driven(rs, lag), rules) for lag in lags}
     best = min(errors, key=errors.__getitem__)
+    if rules.asymmetric_actuator:
+        positive = [lag for lag in lags if lag >= 0]
+        pairs = {(best, v) for v in positive if v != best} | {(f, best) for f in positive if f != best}
+        pair_errors = {pair: unrestricted_error(driven_asymmetric(rs, *pair), rules) for pair in pairs}
+        if pair_errors and min(pair_errors.values()) < errors[best]:
+            fill, vent = min(pair_errors, key=pair_errors.__getitem__)
+            out = driven_asymmetric(rs, fill, vent)
+            note = (
+                f"the hysteresis is driven by the input through a lag of {fill * 1000:.0f} ms while it fills and "
+                f"{vent * 1000:.0f} ms while it vents (the actuator, chosen by least squares with every cause's terms)"
+            )
+            return replace(out, notes=[*out.notes, note])
     if best == 0:
         return rs
     kind = "a lag of" if best > 0 else "the inverse of a lag of"
