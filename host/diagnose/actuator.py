@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+from numpy.typing import NDArray
 
 from host.diagnose.features import actuator_input
 from host.diagnose.groups import cause_groups
@@ -57,9 +58,10 @@ def unrestricted_error(rs: RunSet, rules: Rules) -> float:
     return float(np.sum((rs.y[rows] - fitted) ** 2))
 
 
-def fill_vent_lagged(u: np.ndarray, dt: float, fill_s: float, vent_s: float) -> np.ndarray:
-    """``u`` through a first-order lag of ``fill_s`` [s] while the output rises towards it and
-    ``vent_s`` while it falls (a valve that fills and exhausts through different paths)."""
+def fill_vent_lagged(u: NDArray[np.float64], dt: float, fill_s: float, vent_s: float) -> NDArray[np.float64]:
+    """``u`` through a first-order lag of ``fill_s`` >= 0 [s] while the output rises towards it and
+    ``vent_s`` >= 0 while it falls (a valve that fills and exhausts through different paths),
+    starting settled at the first sample (0: that direction follows at once)."""
     a_fill = 1.0 - np.exp(-dt / fill_s) if fill_s > 0 else 1.0
     a_vent = 1.0 - np.exp(-dt / vent_s) if vent_s > 0 else 1.0
     out = np.empty_like(u)
@@ -71,7 +73,8 @@ def fill_vent_lagged(u: np.ndarray, dt: float, fill_s: float, vent_s: float) -> 
 
 
 def driven_asymmetric(rs: RunSet, fill_s: float, vent_s: float) -> RunSet:
-    """``rs`` with its input through :func:`fill_vent_lagged`, each run from its own first sample."""
+    """``rs`` with its input through :func:`fill_vent_lagged`, each run from its own first sample
+    (``input_lag_s`` holds the fill lag; the note names both)."""
     u = np.empty_like(rs.u)
     for a, b in rs.bounds():
         u[a:b] = fill_vent_lagged(rs.u[a:b], rs.dt, fill_s, vent_s)
@@ -80,15 +83,16 @@ def driven_asymmetric(rs: RunSet, fill_s: float, vent_s: float) -> RunSet:
 
 def with_actuator(rs: RunSet, rules: Rules) -> RunSet:
     """``rs`` driven through the actuator lag whose baseline fits best (:func:`driven`), with a note
-    when it is not 0."""
+    when it is not 0; with ``rules.asymmetric_actuator`` a pair of fill and vent lags
+    (:func:`driven_asymmetric`) with one of them at that lag, when a pair fits better still."""
     lags = usable_lags(rs, rules)
     if len(lags) == 1:
         return rs
     errors = {lag: unrestricted_error(driven(rs, lag), rules) for lag in lags}
     best = min(errors, key=errors.__getitem__)
-    if rules.asymmetric_actuator:
+    if rules.asymmetric_actuator and best >= 0:  # an inverse lag (a snubbed reading) has no fill or vent
         positive = [lag for lag in lags if lag >= 0]
-        pairs = {(best, v) for v in positive if v != best} | {(f, best) for f in positive if f != best}
+        pairs = sorted({(best, v) for v in positive if v != best} | {(f, best) for f in positive if f != best})
         pair_errors = {pair: unrestricted_error(driven_asymmetric(rs, *pair), rules) for pair in pairs}
         if pair_errors and min(pair_errors.values()) < errors[best]:
             fill, vent = min(pair_errors, key=pair_errors.__getitem__)
