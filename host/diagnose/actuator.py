@@ -14,6 +14,7 @@ grid (see the rules' comment).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -32,15 +33,21 @@ def usable_lags(rs: RunSet, rules: Rules) -> list[float]:
     return sorted({0.0, *(lag for lag in rules.input_lags_s if abs(lag) >= 0.5 * rs.dt)})
 
 
+def _per_run(rs: RunSet, through: Callable[[NDArray[np.float64]], NDArray[np.float64]], lag_s: float) -> RunSet:
+    """``rs`` with each run's input passed through ``through`` from its own first sample, recorded
+    as the actuator lag ``lag_s`` [s]."""
+    u = np.empty_like(rs.u)
+    for a, b in rs.bounds():
+        u[a:b] = through(rs.u[a:b])
+    return replace(rs, u=u, input_lag_s=lag_s)
+
+
 def driven(rs: RunSet, lag_s: float) -> RunSet:
     """``rs`` with its input through the actuator lag ``lag_s`` [s] (negative: the inverse of a lag),
     each run from its own first sample."""
     if lag_s == 0:
         return rs
-    u = np.empty_like(rs.u)
-    for a, b in rs.bounds():
-        u[a:b] = actuator_input(rs.u[a:b], rs.dt, lag_s)
-    return replace(rs, u=u, input_lag_s=lag_s)
+    return _per_run(rs, lambda u: actuator_input(u, rs.dt, lag_s), lag_s)
 
 
 def unrestricted_error(rs: RunSet, rules: Rules) -> float:
@@ -75,10 +82,7 @@ def fill_vent_lagged(u: NDArray[np.float64], dt: float, fill_s: float, vent_s: f
 def driven_asymmetric(rs: RunSet, fill_s: float, vent_s: float) -> RunSet:
     """``rs`` with its input through :func:`fill_vent_lagged`, each run from its own first sample
     (``input_lag_s`` holds the fill lag; the note names both)."""
-    u = np.empty_like(rs.u)
-    for a, b in rs.bounds():
-        u[a:b] = fill_vent_lagged(rs.u[a:b], rs.dt, fill_s, vent_s)
-    return replace(rs, u=u, input_lag_s=fill_s)
+    return _per_run(rs, lambda u: fill_vent_lagged(u, rs.dt, fill_s, vent_s), fill_s)
 
 
 def with_actuator(rs: RunSet, rules: Rules) -> RunSet:
@@ -88,27 +92,30 @@ def with_actuator(rs: RunSet, rules: Rules) -> RunSet:
     lags = usable_lags(rs, rules)
     if len(lags) == 1:
         return rs
-    errors = {lag: unrestricted_error(driven(rs, lag), rules) for lag in lags}
-    best = min(errors, key=errors.__getitem__)
+    # every choice is a (fill, vent) pair; the symmetric ones first, so a pair must fit strictly better
+    errors = {(lag, lag): unrestricted_error(driven(rs, lag), rules) for lag in lags}
+    best = min(errors, key=errors.__getitem__)[0]
     if rules.asymmetric_actuator and best >= 0:  # an inverse lag (a snubbed reading) has no fill or vent
         positive = [lag for lag in lags if lag >= 0]
         pairs = sorted({(best, v) for v in positive if v != best} | {(f, best) for f in positive if f != best})
-        pair_errors = {pair: unrestricted_error(driven_asymmetric(rs, *pair), rules) for pair in pairs}
-        if pair_errors and min(pair_errors.values()) < errors[best]:
-            fill, vent = min(pair_errors, key=pair_errors.__getitem__)
-            out = driven_asymmetric(rs, fill, vent)
-            note = (
-                f"the hysteresis is driven by the input through a lag of {fill * 1000:.0f} ms while it fills and "
-                f"{vent * 1000:.0f} ms while it vents (the actuator, chosen by least squares with every cause's terms)"
-            )
-            return replace(out, notes=[*out.notes, note])
-    if best == 0:
+        errors.update({pair: unrestricted_error(driven_asymmetric(rs, *pair), rules) for pair in pairs})
+    fill, vent = min(errors, key=errors.__getitem__)
+    if fill == vent == 0:
         return rs
-    kind = "a lag of" if best > 0 else "the inverse of a lag of"
-    note = (
-        f"the hysteresis is driven by the input through {kind} {abs(best) * 1000:.0f} ms (the actuator, chosen "
-        f"by least squares with every cause's terms from {len(lags)} lags, 0 among them); the causes are tested "
+    out = driven(rs, fill) if fill == vent else driven_asymmetric(rs, fill, vent)
+    return replace(out, notes=[*out.notes, _note(fill, vent, len(lags))])
+
+
+def _note(fill_s: float, vent_s: float, tried: int) -> str:
+    """What the record's notes say of the chosen actuator (lags [s]; ``tried``: symmetric lags tried)."""
+    if fill_s != vent_s:
+        return (
+            f"the hysteresis is driven by the input through a lag of {fill_s * 1000:.0f} ms while it fills and "
+            f"{vent_s * 1000:.0f} ms while it vents (the actuator, chosen by least squares with every cause's terms)"
+        )
+    kind = "a lag of" if fill_s > 0 else "the inverse of a lag of"
+    return (
+        f"the hysteresis is driven by the input through {kind} {abs(fill_s) * 1000:.0f} ms (the actuator, chosen "
+        f"by least squares with every cause's terms from {tried} lags, 0 among them); the causes are tested "
         "beyond it"
     )
-    out = driven(rs, best)
-    return replace(out, notes=[*out.notes, note])
