@@ -57,12 +57,11 @@ from host.diagnose.nuisance import ar_whitener  # noqa: E402
 from host.diagnose.rules import CAUSES, RULES, Rules, with_overrides  # noqa: E402
 from host.diagnose.runs import run_set  # noqa: E402
 from host.diagnose.v3 import (  # noqa: E402
+    beyond_the_named,
     choose,
     column_heldout_test,
     confirmed,
     decide,
-    faded,
-    further_causes,
     held_out_beyond,
     passing_columns,
     richer_rung,
@@ -145,10 +144,7 @@ def dump_record(m: Measurement, wave: np.ndarray | None, rules: Rules, seed: int
     def trial_beyond(candidate: str, before: list[str]) -> HeldOut:
         return held_out_beyond(rs, base, groups, candidate, before, masks, rules, seed, clusters, whitener)
 
-    also = [g for g in ranked if g != choice.cause and g not in choice.rejected]
-    further = further_causes(
-        choice.cause, [g for g in also if not faded(g, tests, lambda: richer, rules)], trial_beyond, rules
-    )
+    further = beyond_the_named(choice, ranked, tests, lambda: richer, trial_beyond, rules)[1]
     oracle = None
     if wave is not None:
         w = whitened(rs, base, rules)

@@ -318,6 +318,25 @@ def further_causes(
     return found
 
 
+def beyond_the_named(
+    choice: Choice,
+    ranked: list[str],
+    tests: dict[str, GroupTest],
+    richer_tests: Callable[[], dict[str, GroupTest]],
+    trial_beyond: Callable[[str, list[str]], HeldOut],
+    rules: Rules,
+) -> tuple[list[str], list[tuple[str, HeldOut]]]:
+    """(also, further) for the cause ``choice`` names: the other ``ranked`` causes it did not reject
+    (none when nothing is named), and those of them confirmed held out beyond it in turn
+    (:func:`further_causes`; a cause that fades on the ladder is not tried). One rule for
+    :func:`diagnose_runs` and the dumps of ``bench/diagnose_v3_dump.py``."""
+    if choice.cause == "none":
+        return [], []
+    also = [g for g in ranked if g != choice.cause and g not in choice.rejected]
+    candidates = [g for g in also if not faded(g, tests, richer_tests, rules)]
+    return also, further_causes(choice.cause, candidates, trial_beyond, rules)
+
+
 def column_heldout_test(
     rs: RunSet,
     base: Baseline,
@@ -446,10 +465,7 @@ def diagnose_runs(
             choice.rejected,
         )
         result_heldout = trials.get(choice.heldout_of) if choice.heldout_of else None
-        also = [g for g in ranked if g != cause and g not in rejected] if cause != "none" else []
-        further = further_causes(
-            cause, [g for g in also if not faded(g, tests, richer_tests, rules)], trial_beyond, rules
-        )
+        also, further = beyond_the_named(choice, ranked, tests, richer_tests, trial_beyond, rules)
     first = rejected[0] if rejected else "none"
     out = DiagnosisV3(
         cause,
